@@ -1,0 +1,35 @@
+//! fathom-core: what a scene is and how it is evaluated.
+//!
+//! - [`registry`]: how each primitive, fractal and operator is declared once;
+//! - [`primitives`], [`fractals`], [`transforms`], [`modifiers`], [`combine`]: the declarations;
+//! - [`scene`]: the scene tree, camera, lights, render settings;
+//! - [`tape`]: the flat program a scene compiles to (see `docs/tape.md`);
+//! - [`eval`]: the CPU interpreter (f64 scalar and f32x8 packet paths) and normals;
+//! - [`reference`]: a direct tree walk that defines what the tape must compute.
+
+pub mod call_serde;
+pub mod camera;
+pub mod combine;
+pub mod eval;
+pub mod fractals;
+pub mod limits;
+pub mod modifiers;
+pub mod presets;
+pub mod primitives;
+pub mod real;
+pub mod reference;
+pub mod registry;
+pub mod scene;
+pub mod scene_file;
+pub mod tape;
+pub mod transforms;
+pub mod value;
+pub mod vec3;
+
+pub use camera::{Camera, CameraFrame};
+pub use eval::Evaluator;
+pub use real::{F32x8, Real};
+pub use scene::{Call, Material, Node, Scene};
+pub use tape::Tape;
+pub use value::Value;
+pub use vec3::V3;

@@ -1,0 +1,416 @@
+//! The scalar abstraction every distance function is written against.
+//!
+//! Each primitive, operator and fractal is written once, generic over [`Real`]. Two types
+//! implement it: `f64` (the exact scalar path used for deep zoom and as the reference) and
+//! [`F32x8`] (eight `f32` lanes evaluated together by AVX2, the throughput path). Control flow
+//! that depends on a value (a fold, a bailout) is written with masks and [`Real::select`], so the
+//! same source is branch-free on the packet path and an ordinary `if` on the scalar path.
+
+use std::fmt::Debug;
+use std::ops::{
+    Add, AddAssign, BitAnd, BitOr, Div, DivAssign, Mul, MulAssign, Neg, Not, Sub, SubAssign,
+};
+
+/// A per-lane boolean: `bool` for scalars, a lane mask for packets.
+pub trait Mask:
+    Copy + Debug + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self>
+{
+    /// True when any lane is set.
+    fn any(self) -> bool;
+    /// True when every lane is set.
+    fn all(self) -> bool;
+}
+
+impl Mask for bool {
+    #[inline(always)]
+    fn any(self) -> bool {
+        self
+    }
+    #[inline(always)]
+    fn all(self) -> bool {
+        self
+    }
+}
+
+/// A real number, or a packet of them evaluated in lockstep.
+pub trait Real:
+    Copy
+    + Debug
+    + Send
+    + Sync
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + MulAssign
+    + DivAssign
+    + 'static
+{
+    /// The lane mask produced by comparisons.
+    type Mask: Mask;
+    /// Number of lanes (1 for scalars).
+    const LANES: usize;
+
+    /// The same value in every lane.
+    fn splat(v: f64) -> Self;
+    /// Lane `i` as an `f64`.
+    fn lane(self, i: usize) -> f64;
+    /// Build from per-lane values (missing lanes repeat the last given value).
+    fn from_lanes(v: &[f64]) -> Self;
+
+    fn sqrt(self) -> Self;
+    fn abs(self) -> Self;
+    fn min(self, o: Self) -> Self;
+    fn max(self, o: Self) -> Self;
+    fn floor(self) -> Self;
+    /// Round half away from zero.
+    fn round(self) -> Self;
+    fn sin(self) -> Self;
+    fn cos(self) -> Self;
+    fn sin_cos(self) -> (Self, Self);
+    fn acos(self) -> Self;
+    fn asin(self) -> Self;
+    /// `self.atan2(x)` is the angle of the point `(x, self)`.
+    fn atan2(self, x: Self) -> Self;
+    fn ln(self) -> Self;
+    fn exp(self) -> Self;
+    /// `self` raised to `e`, for `self > 0`.
+    fn powf(self, e: Self) -> Self;
+    /// -1, 0 or +1 (0 maps to +1 on some paths: use only where the sign of 0 does not matter).
+    fn signum(self) -> Self;
+
+    fn lt(self, o: Self) -> Self::Mask;
+    fn le(self, o: Self) -> Self::Mask;
+    fn gt(self, o: Self) -> Self::Mask;
+    fn ge(self, o: Self) -> Self::Mask;
+    /// Lanes that are neither NaN nor infinite.
+    fn is_finite(self) -> Self::Mask;
+    /// Per lane: `m ? a : b`.
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+
+    #[inline(always)]
+    fn clamp(self, lo: Self, hi: Self) -> Self {
+        self.max(lo).min(hi)
+    }
+    #[inline(always)]
+    fn zero() -> Self {
+        Self::splat(0.0)
+    }
+    #[inline(always)]
+    fn one() -> Self {
+        Self::splat(1.0)
+    }
+    /// Linear interpolation `a + (b - a) * t`.
+    #[inline(always)]
+    fn lerp(a: Self, b: Self, t: Self) -> Self {
+        a + (b - a) * t
+    }
+}
+
+impl Real for f64 {
+    type Mask = bool;
+    const LANES: usize = 1;
+
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn lane(self, _i: usize) -> f64 {
+        self
+    }
+    #[inline(always)]
+    fn from_lanes(v: &[f64]) -> Self {
+        v[0]
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        f64::min(self, o)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        f64::max(self, o)
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        f64::floor(self)
+    }
+    #[inline(always)]
+    fn round(self) -> Self {
+        f64::round(self)
+    }
+    #[inline(always)]
+    fn sin(self) -> Self {
+        f64::sin(self)
+    }
+    #[inline(always)]
+    fn cos(self) -> Self {
+        f64::cos(self)
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        f64::sin_cos(self)
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        f64::acos(self)
+    }
+    #[inline(always)]
+    fn asin(self) -> Self {
+        f64::asin(self)
+    }
+    #[inline(always)]
+    fn atan2(self, x: Self) -> Self {
+        f64::atan2(self, x)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        f64::ln(self)
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        f64::exp(self)
+    }
+    #[inline(always)]
+    fn powf(self, e: Self) -> Self {
+        f64::powf(self, e)
+    }
+    #[inline(always)]
+    fn signum(self) -> Self {
+        f64::signum(self)
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> bool {
+        self < o
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> bool {
+        self <= o
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> bool {
+        self > o
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> bool {
+        self >= o
+    }
+    #[inline(always)]
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+    #[inline(always)]
+    fn select(m: bool, a: Self, b: Self) -> Self {
+        if m { a } else { b }
+    }
+}
+
+/// Eight `f32` lanes (AVX2 on x86-64-v3), the packet type of the throughput path.
+pub type F32x8 = wide::f32x8;
+
+/// Lane mask of [`F32x8`]: all-ones bits in set lanes.
+#[derive(Clone, Copy, Debug)]
+pub struct Mask8(pub wide::f32x8);
+
+impl BitAnd for Mask8 {
+    type Output = Self;
+    #[inline(always)]
+    fn bitand(self, o: Self) -> Self {
+        Mask8(self.0 & o.0)
+    }
+}
+impl BitOr for Mask8 {
+    type Output = Self;
+    #[inline(always)]
+    fn bitor(self, o: Self) -> Self {
+        Mask8(self.0 | o.0)
+    }
+}
+impl Not for Mask8 {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        Mask8(!self.0)
+    }
+}
+impl Mask for Mask8 {
+    #[inline(always)]
+    fn any(self) -> bool {
+        self.0.any()
+    }
+    #[inline(always)]
+    fn all(self) -> bool {
+        self.0.all()
+    }
+}
+
+impl Real for F32x8 {
+    type Mask = Mask8;
+    const LANES: usize = 8;
+
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        wide::f32x8::splat(v as f32)
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> f64 {
+        self.as_array()[i] as f64
+    }
+    #[inline(always)]
+    fn from_lanes(v: &[f64]) -> Self {
+        let mut a = [0f32; 8];
+        for (i, x) in a.iter_mut().enumerate() {
+            *x = v[i.min(v.len() - 1)] as f32;
+        }
+        wide::f32x8::new(a)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        wide::f32x8::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        wide::f32x8::abs(self)
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        wide::f32x8::fast_min(self, o)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        wide::f32x8::fast_max(self, o)
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        wide::f32x8::floor(self)
+    }
+    #[inline(always)]
+    fn round(self) -> Self {
+        // wide rounds half to even; match f64::round (half away from zero).
+        let t = wide::f32x8::trunc(self);
+        let frac = self - t;
+        let half = wide::f32x8::splat(0.5);
+        let up = frac.abs().simd_ge(half);
+        up.select(t + self.signum(), t)
+    }
+    #[inline(always)]
+    fn sin(self) -> Self {
+        wide::f32x8::sin(self)
+    }
+    #[inline(always)]
+    fn cos(self) -> Self {
+        wide::f32x8::cos(self)
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        wide::f32x8::sin_cos(self)
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        wide::f32x8::acos(self)
+    }
+    #[inline(always)]
+    fn asin(self) -> Self {
+        wide::f32x8::asin(self)
+    }
+    #[inline(always)]
+    fn atan2(self, x: Self) -> Self {
+        wide::f32x8::atan2(self, x)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        wide::f32x8::ln(self)
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        wide::f32x8::exp(self)
+    }
+    #[inline(always)]
+    fn powf(self, e: Self) -> Self {
+        (wide::f32x8::ln(self) * e).exp()
+    }
+    #[inline(always)]
+    fn signum(self) -> Self {
+        wide::f32x8::signum(self)
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> Mask8 {
+        Mask8(self.simd_lt(o))
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> Mask8 {
+        Mask8(self.simd_le(o))
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> Mask8 {
+        Mask8(self.simd_gt(o))
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> Mask8 {
+        Mask8(self.simd_ge(o))
+    }
+    #[inline(always)]
+    fn is_finite(self) -> Mask8 {
+        Mask8(wide::f32x8::is_finite(self))
+    }
+    #[inline(always)]
+    fn select(m: Mask8, a: Self, b: Self) -> Self {
+        m.0.select(a, b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_lanes(f: impl Fn(F32x8) -> F32x8, g: impl Fn(f64) -> f64, xs: [f64; 8], tol: f64) {
+        let v = f(F32x8::from_lanes(&xs));
+        for (i, &x) in xs.iter().enumerate() {
+            let want = g(x);
+            let got = v.lane(i);
+            assert!(
+                (want - got).abs() <= tol * (1.0 + want.abs()),
+                "lane {i}: x={x} want {want} got {got}"
+            );
+        }
+    }
+
+    #[test]
+    fn packet_functions_match_f64() {
+        let xs = [-2.5, -1.5, -0.5, 0.0, 0.3, 0.5, 1.5, 2.49];
+        check_lanes(<F32x8 as Real>::round, f64::round, xs, 1e-7);
+        check_lanes(<F32x8 as Real>::floor, f64::floor, xs, 1e-7);
+        check_lanes(<F32x8 as Real>::abs, f64::abs, xs, 1e-7);
+        check_lanes(<F32x8 as Real>::sin, f64::sin, xs, 1e-6);
+        check_lanes(<F32x8 as Real>::cos, f64::cos, xs, 1e-6);
+        let unit = [-1.0, -0.9, -0.5, 0.0, 0.1, 0.5, 0.99, 1.0];
+        check_lanes(<F32x8 as Real>::acos, f64::acos, unit, 1e-6);
+        let pos = [1e-3, 0.1, 0.5, 1.0, 2.0, 7.5, 100.0, 1e4];
+        check_lanes(<F32x8 as Real>::ln, f64::ln, pos, 1e-6);
+        check_lanes(<F32x8 as Real>::sqrt, f64::sqrt, pos, 1e-7);
+        check_lanes(|v| Real::powf(v, F32x8::splat(8.0)), |x| x.powf(8.0), pos, 1e-5);
+        check_lanes(|v| Real::atan2(v, F32x8::splat(-0.7)), |y| y.atan2(-0.7), xs, 1e-6);
+    }
+
+    #[test]
+    fn select_and_masks() {
+        let a = F32x8::from_lanes(&[0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+        let m = Real::lt(a, F32x8::splat(3.5));
+        assert!(m.any() && !m.all());
+        let s = <F32x8 as Real>::select(m, F32x8::splat(1.0), F32x8::splat(-1.0));
+        assert_eq!(s.lane(3), 1.0);
+        assert_eq!(s.lane(4), -1.0);
+        assert!(1.0f64.lt(2.0).all());
+    }
+}

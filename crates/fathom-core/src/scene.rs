@@ -1,0 +1,524 @@
+//! The scene model: a tree of nodes in which every node is a shape (primitive or fractal), the
+//! edge to its parent is a combine operator, and each node carries its own ordered list of
+//! domain operators and a material. The root may carry an IFS loop. A scene also holds the
+//! camera, the lights and the render settings.
+//!
+//! Semantics (the tape compiler and the reference evaluator both follow them):
+//! - a node's point operators (`Transform`s) apply, in list order, to the node's shape and to
+//!   its whole subtree, like transforms in a scene graph;
+//! - the node's shape is evaluated, then each child in order is combined into it with the
+//!   child's `combine` operator (the root's `combine` is ignored);
+//! - the node's distance modifiers (`Modifier`s) then apply, in list order, to the combined
+//!   value of the subtree;
+//! - the IFS loop runs `iterations` times over its operators before the root is evaluated.
+
+use crate::camera::Camera;
+use crate::combine::Combine;
+use crate::fractals::Fractal;
+use crate::limits;
+use crate::modifiers::Modifier;
+use crate::primitives::Primitive;
+use crate::registry::{Def, Family};
+use crate::transforms::Transform;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use std::sync::LazyLock;
+
+/// The scene-file format version this build reads and writes.
+pub const SCENE_VERSION: u32 = 1;
+
+/// A node's shape: a primitive or a fractal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Shape {
+    Primitive(Primitive),
+    Fractal(Fractal),
+}
+
+static SHAPES: LazyLock<Vec<Shape>> = LazyLock::new(|| {
+    Primitive::ALL
+        .iter()
+        .map(|&p| Shape::Primitive(p))
+        .chain(Fractal::ALL.iter().map(|&f| Shape::Fractal(f)))
+        .collect()
+});
+
+impl Family for Shape {
+    const NOUN: &'static str = "shape";
+    fn all() -> &'static [Self] {
+        &SHAPES
+    }
+    fn def(self) -> &'static Def {
+        match self {
+            Shape::Primitive(p) => p.def(),
+            Shape::Fractal(f) => f.def(),
+        }
+    }
+    fn index(self) -> usize {
+        match self {
+            Shape::Primitive(p) => p.index(),
+            Shape::Fractal(f) => Primitive::ALL.len() + f.index(),
+        }
+    }
+}
+
+/// An entry of a node's operator list: a point operator or a distance modifier.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DomainOp {
+    Transform(Transform),
+    Modifier(Modifier),
+}
+
+static DOMAIN_OPS: LazyLock<Vec<DomainOp>> = LazyLock::new(|| {
+    Transform::ALL
+        .iter()
+        .map(|&t| DomainOp::Transform(t))
+        .chain(Modifier::ALL.iter().map(|&m| DomainOp::Modifier(m)))
+        .collect()
+});
+
+impl Family for DomainOp {
+    const NOUN: &'static str = "domain operator";
+    fn all() -> &'static [Self] {
+        &DOMAIN_OPS
+    }
+    fn def(self) -> &'static Def {
+        match self {
+            DomainOp::Transform(t) => t.def(),
+            DomainOp::Modifier(m) => m.def(),
+        }
+    }
+    fn index(self) -> usize {
+        match self {
+            DomainOp::Transform(t) => t.index(),
+            DomainOp::Modifier(m) => Transform::ALL.len() + m.index(),
+        }
+    }
+}
+
+/// One use of a registry entry with its parameter values (flat, in declaration order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Call<K> {
+    pub kind: K,
+    pub params: Vec<f64>,
+}
+
+impl<K: Family> Call<K> {
+    /// The entry with all parameters at their defaults.
+    pub fn new(kind: K) -> Self {
+        Call {
+            kind,
+            params: kind.def().defaults(),
+        }
+    }
+
+    /// Sets a parameter by name, checking it against its declared range.
+    pub fn set(&mut self, name: &str, values: &[f64]) -> Result<(), String> {
+        let def = self.kind.def();
+        let (off, spec) = def.param(name).ok_or_else(|| {
+            format!(
+                "`{}` has no parameter `{name}`; it has: {}",
+                def.name,
+                def.params
+                    .iter()
+                    .map(|p| p.name)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })?;
+        spec.check(values)
+            .map_err(|e| format!("{}: {e}", def.name))?;
+        self.params[off..off + values.len()].copy_from_slice(values);
+        Ok(())
+    }
+
+    /// Builder form of [`Call::set`]; panics on a bad name or value, for code-built scenes.
+    #[track_caller]
+    pub fn with(mut self, name: &str, values: &[f64]) -> Self {
+        if let Err(e) = self.set(name, values) {
+            panic!("{e}");
+        }
+        self
+    }
+
+    /// A parameter's values by name.
+    pub fn get(&self, name: &str) -> Option<&[f64]> {
+        let (off, spec) = self.kind.def().param(name)?;
+        Some(&self.params[off..off + spec.kind.width()])
+    }
+
+    /// Checks every parameter against its declaration.
+    pub fn check(&self) -> Result<(), String> {
+        self.kind.def().check(&self.params)
+    }
+}
+
+/// Surface appearance for Blinn-Phong shading.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Material {
+    /// Diffuse colour, linear RGB in [0, 1].
+    pub albedo: [f64; 3],
+    /// Specular strength in [0, 1].
+    pub specular: f64,
+    /// Blinn-Phong exponent, [1, 4096].
+    pub shininess: f64,
+    /// How much the orbit-trap palette replaces the albedo, [0, 1].
+    pub trap_colour: f64,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            albedo: [0.75, 0.75, 0.75],
+            specular: 0.3,
+            shininess: 32.0,
+            trap_colour: 0.0,
+        }
+    }
+}
+
+/// A node of the scene tree.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Node {
+    /// How this node joins its parent (ignored at the root).
+    #[serde(default = "default_combine")]
+    pub combine: Call<Combine>,
+    /// The node's own shape.
+    pub shape: Call<Shape>,
+    /// Domain operators (point transforms and distance modifiers), in order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ops: Vec<Call<DomainOp>>,
+    #[serde(default)]
+    pub material: Material,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub children: Vec<Node>,
+}
+
+fn default_combine() -> Call<Combine> {
+    Call::new(Combine::Union)
+}
+
+impl Node {
+    /// A node with the given shape, no operators, default material and no children.
+    pub fn new(shape: impl Into<Call<Shape>>) -> Self {
+        Node {
+            combine: default_combine(),
+            shape: shape.into(),
+            ops: Vec::new(),
+            material: Material::default(),
+            children: Vec::new(),
+        }
+    }
+    /// Sets the combine operator on the edge to the parent.
+    pub fn combine(mut self, c: impl Into<Call<Combine>>) -> Self {
+        self.combine = c.into();
+        self
+    }
+    /// Appends a domain operator.
+    pub fn op(mut self, op: impl Into<Call<DomainOp>>) -> Self {
+        self.ops.push(op.into());
+        self
+    }
+    /// Appends a child.
+    pub fn child(mut self, n: Node) -> Self {
+        self.children.push(n);
+        self
+    }
+    pub fn material(mut self, m: Material) -> Self {
+        self.material = m;
+        self
+    }
+    /// Number of nodes in this subtree.
+    pub fn count(&self) -> usize {
+        1 + self.children.iter().map(Node::count).sum::<usize>()
+    }
+    /// Depth of this subtree (a leaf has depth 1).
+    pub fn depth(&self) -> usize {
+        1 + self.children.iter().map(Node::depth).max().unwrap_or(0)
+    }
+}
+
+macro_rules! into_call {
+    ($K:ty => $W:ident :: $V:ident) => {
+        impl From<$K> for Call<$W> {
+            fn from(k: $K) -> Self {
+                Call::new($W::$V(k))
+            }
+        }
+        impl From<Call<$K>> for Call<$W> {
+            fn from(c: Call<$K>) -> Self {
+                Call {
+                    kind: $W::$V(c.kind),
+                    params: c.params,
+                }
+            }
+        }
+    };
+}
+into_call!(Primitive => Shape::Primitive);
+into_call!(Fractal => Shape::Fractal);
+into_call!(Transform => DomainOp::Transform);
+into_call!(Modifier => DomainOp::Modifier);
+
+impl From<Combine> for Call<Combine> {
+    fn from(c: Combine) -> Self {
+        Call::new(c)
+    }
+}
+
+/// An iterated function system applied to the point before the root's tree is evaluated.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ifs {
+    /// How many times the operator list runs, [0, limits::MAX_IFS_ITERATIONS].
+    pub iterations: u32,
+    /// Folds, rotations, scalings and translations, applied in order each iteration.
+    pub ops: Vec<Call<Transform>>,
+}
+
+/// A directional light.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Light {
+    /// Direction towards the light (need not be unit length).
+    pub direction: DVec3,
+    /// Linear RGB colour.
+    pub colour: [f64; 3],
+    pub intensity: f64,
+    /// Whether this light casts soft shadows.
+    pub shadows: bool,
+}
+
+impl Default for Light {
+    fn default() -> Self {
+        Light {
+            direction: DVec3::new(0.6, 0.8, 0.4),
+            colour: [1.0, 0.97, 0.9],
+            intensity: 1.0,
+            shadows: true,
+        }
+    }
+}
+
+/// Background and lighting environment plus the tracer's quality knobs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RenderSettings {
+    /// Sky colour straight up (linear RGB).
+    pub sky_top: [f64; 3],
+    /// Sky colour at and below the horizon (linear RGB).
+    pub sky_bottom: [f64; 3],
+    /// Ambient light level, [0, 1].
+    pub ambient: f64,
+    /// Strength of distance-field ambient occlusion, [0, 4].
+    pub ao: f64,
+    /// Penumbra sharpness of soft shadows (larger is harder), [1, 256].
+    pub shadow_softness: f64,
+    /// Fog density per world unit (0 disables), [0, 1e6].
+    pub fog: f64,
+    /// Sphere-tracing step limit per ray, [1, limits::MAX_STEPS].
+    pub max_steps: u32,
+    /// Rays stop beyond this distance from the camera.
+    pub max_distance: f64,
+    /// Hit threshold as a multiple of the pixel footprint at the hit distance, [0.01, 16].
+    pub pixel_epsilon: f64,
+    /// Orbit-trap cosine palette `a + b cos(2 pi (c t + d))`, rows a, b, c, d.
+    pub palette: [[f64; 3]; 4],
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            sky_top: [0.30, 0.45, 0.75],
+            sky_bottom: [0.85, 0.80, 0.75],
+            ambient: 0.15,
+            ao: 1.0,
+            shadow_softness: 16.0,
+            fog: 0.0,
+            max_steps: 256,
+            max_distance: 100.0,
+            pixel_epsilon: 1.0,
+            palette: [
+                [0.5, 0.5, 0.5],
+                [0.5, 0.5, 0.5],
+                [1.0, 1.0, 1.0],
+                [0.0, 0.10, 0.20],
+            ],
+        }
+    }
+}
+
+/// A whole scene: the tree plus how to look at it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Scene-file format version; this build reads [`SCENE_VERSION`].
+    pub version: u32,
+    #[serde(default)]
+    pub camera: Camera,
+    #[serde(default = "default_lights")]
+    pub lights: Vec<Light>,
+    #[serde(default)]
+    pub render: RenderSettings,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ifs: Option<Ifs>,
+    pub root: Node,
+}
+
+fn default_lights() -> Vec<Light> {
+    vec![Light::default()]
+}
+
+impl Scene {
+    /// A scene of one tree with the default camera, one light and default settings.
+    pub fn new(root: Node) -> Self {
+        Scene {
+            version: SCENE_VERSION,
+            camera: Camera::default(),
+            lights: default_lights(),
+            render: RenderSettings::default(),
+            ifs: None,
+            root,
+        }
+    }
+
+    /// Checks the version, every parameter, and the structural limits of [`crate::limits`].
+    /// Returns the first problem with the path of the node it is in.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.version != SCENE_VERSION {
+            return Err(format!(
+                "scene version {} is not supported; this build reads version {SCENE_VERSION}",
+                self.version
+            ));
+        }
+        let nodes = self.root.count();
+        if nodes > limits::MAX_NODES {
+            return Err(format!(
+                "the scene has {nodes} nodes; the limit is {}",
+                limits::MAX_NODES
+            ));
+        }
+        let depth = self.root.depth();
+        if depth > limits::MAX_TREE_DEPTH {
+            return Err(format!(
+                "the tree is {depth} levels deep; the limit is {}",
+                limits::MAX_TREE_DEPTH
+            ));
+        }
+        if let Some(ifs) = &self.ifs {
+            if ifs.iterations > limits::MAX_IFS_ITERATIONS {
+                return Err(format!(
+                    "ifs.iterations = {} is out of range [0, {}]",
+                    ifs.iterations,
+                    limits::MAX_IFS_ITERATIONS
+                ));
+            }
+            if ifs.ops.len() > limits::MAX_OPS_PER_LIST {
+                return Err(format!(
+                    "ifs has {} operators; the limit is {}",
+                    ifs.ops.len(),
+                    limits::MAX_OPS_PER_LIST
+                ));
+            }
+            for (i, op) in ifs.ops.iter().enumerate() {
+                op.check().map_err(|e| format!("ifs.ops[{i}]: {e}"))?;
+            }
+        }
+        validate_node(&self.root, "root")?;
+        self.camera.validate()?;
+        if self.lights.len() > limits::MAX_LIGHTS {
+            return Err(format!(
+                "{} lights; the limit is {}",
+                self.lights.len(),
+                limits::MAX_LIGHTS
+            ));
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            let ok = l.direction.is_finite()
+                && l.direction.length_squared() > 0.0
+                && l.intensity.is_finite()
+                && (0.0..=1e3).contains(&l.intensity)
+                && l.colour
+                    .iter()
+                    .all(|c| c.is_finite() && (0.0..=1e3).contains(c));
+            if !ok {
+                return Err(format!(
+                    "lights[{i}]: direction must be finite and non-zero, colour and intensity in [0, 1000]"
+                ));
+            }
+        }
+        self.validate_render()
+    }
+
+    fn validate_render(&self) -> Result<(), String> {
+        let r = &self.render;
+        let ranged = |name: &str, v: f64, lo: f64, hi: f64| {
+            if v.is_finite() && (lo..=hi).contains(&v) {
+                Ok(())
+            } else {
+                Err(format!("render.{name} = {v} is out of range [{lo}, {hi}]"))
+            }
+        };
+        for (name, c) in [("sky_top", r.sky_top), ("sky_bottom", r.sky_bottom)] {
+            for v in c {
+                ranged(name, v, 0.0, 1e3)?;
+            }
+        }
+        for row in r.palette {
+            for v in row {
+                ranged("palette", v, -1e3, 1e3)?;
+            }
+        }
+        ranged("ambient", r.ambient, 0.0, 1.0)?;
+        ranged("ao", r.ao, 0.0, 4.0)?;
+        ranged("shadow_softness", r.shadow_softness, 1.0, 256.0)?;
+        ranged("fog", r.fog, 0.0, 1e6)?;
+        ranged(
+            "max_steps",
+            r.max_steps as f64,
+            1.0,
+            limits::MAX_STEPS as f64,
+        )?;
+        ranged("max_distance", r.max_distance, 1e-9, 1e12)?;
+        ranged("pixel_epsilon", r.pixel_epsilon, 0.01, 16.0)?;
+        Ok(())
+    }
+}
+
+fn validate_node(n: &Node, path: &str) -> Result<(), String> {
+    n.combine
+        .check()
+        .map_err(|e| format!("{path}.combine: {e}"))?;
+    n.shape.check().map_err(|e| format!("{path}.shape: {e}"))?;
+    if n.ops.len() > limits::MAX_OPS_PER_LIST {
+        return Err(format!(
+            "{path}.ops: {} operators; the limit is {}",
+            n.ops.len(),
+            limits::MAX_OPS_PER_LIST
+        ));
+    }
+    for (i, op) in n.ops.iter().enumerate() {
+        op.check().map_err(|e| format!("{path}.ops[{i}]: {e}"))?;
+    }
+    let m = &n.material;
+    let mat_ok = m
+        .albedo
+        .iter()
+        .all(|c| c.is_finite() && (0.0..=1.0).contains(c))
+        && m.specular.is_finite()
+        && (0.0..=1.0).contains(&m.specular)
+        && m.shininess.is_finite()
+        && (1.0..=4096.0).contains(&m.shininess)
+        && m.trap_colour.is_finite()
+        && (0.0..=1.0).contains(&m.trap_colour);
+    if !mat_ok {
+        return Err(format!(
+            "{path}.material: albedo and specular must lie in [0, 1], shininess in [1, 4096], trap_colour in [0, 1]"
+        ));
+    }
+    for (i, c) in n.children.iter().enumerate() {
+        validate_node(c, &format!("{path}.children[{i}]"))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,22 @@
+//! `fathom bench`: benchmarks that print JSON. Each kind lives in its own module.
+
+use clap::{Args, Subcommand};
+
+#[derive(Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    kind: BenchKind,
+}
+
+#[derive(Subcommand)]
+enum BenchKind {
+    /// Tape evaluations per second per thread for each preset (f64 scalar, f32 packet), and
+    /// tape compile time for a 100-node tree.
+    Eval(crate::bench_eval::EvalArgs),
+}
+
+pub fn run(a: BenchArgs) -> Result<(), String> {
+    match a.kind {
+        BenchKind::Eval(e) => crate::bench_eval::run(e),
+    }
+}

@@ -1,0 +1,59 @@
+//! The `fathom` command: render, list, print scenes, benchmark.
+//!
+//! Each subcommand lives in its own module; this file only parses the command line and
+//! dispatches. Run with no arguments it renders the default preset and says where it went.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod bench;
+mod bench_eval;
+mod cmd_list;
+mod cmd_render;
+mod cmd_scene;
+
+/// Explore infinite 3D worlds built from distance fields: fractals, CSG trees folded into
+/// iterated function systems, rendered by sphere tracing.
+///
+/// Examples:
+///   fathom                                   render the default preset to fathom.png
+///   fathom render --preset menger -o m.png   render a preset
+///   fathom list primitives                   what a scene can be made of
+///   fathom scene --preset mandelbulb > my.ron   start a scene file from a preset
+///   fathom render my.ron -o my.png           render it
+#[derive(Parser)]
+#[command(name = "fathom", version, verbatim_doc_comment)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file or preset to an image.
+    Render(cmd_render::RenderArgs),
+    /// List presets, primitives, operators or fractals with their parameters.
+    List(cmd_list::ListArgs),
+    /// Print a preset (or a scene file, normalised) as scene-file text.
+    Scene(cmd_scene::SceneArgs),
+    /// Run a benchmark and print JSON.
+    Bench(bench::BenchArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => cmd_render::run_default(),
+        Some(Command::Render(a)) => cmd_render::run(a),
+        Some(Command::List(a)) => cmd_list::run(a),
+        Some(Command::Scene(a)) => cmd_scene::run(a),
+        Some(Command::Bench(a)) => bench::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("fathom: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
