@@ -392,3 +392,113 @@ impl Tape {
         s
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::combine::Combine;
+    use crate::primitives::Primitive;
+    use crate::reference::eval_tree;
+    use crate::scene::Ifs;
+
+    fn two_spheres() -> Scene {
+        Scene::new(
+            Node::new(Primitive::Sphere).child(
+                Node::new(Primitive::Sphere)
+                    .combine(Combine::SmoothUnion)
+                    .op(Call::new(Transform::Translate).with("offset", &[1.5, 0.0, 0.0])),
+            ),
+        )
+    }
+
+    #[test]
+    fn parameter_edits_only_rewrite_parameters() {
+        let mut s = two_spheres();
+        let mut tape = Tape::compile(&s).unwrap();
+        let instrs = tape.instrs().to_vec();
+        s.root.children[0].ops[0]
+            .set("offset", &[3.0, 0.0, 0.0])
+            .unwrap();
+        s.root.material.albedo = [1.0, 0.0, 0.0];
+        tape.update_params(&s).unwrap();
+        assert_eq!(tape.instrs(), &instrs[..]);
+        assert_eq!(tape.materials()[0].albedo, [1.0, 0.0, 0.0]);
+        assert_eq!(tape, Tape::compile(&s).unwrap());
+        // At x = 3 the moved sphere's centre: distance -1.
+        assert!((tape.eval_f64([3.0, 0.0, 0.0]).d + 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn structure_edits_are_refused_by_update_params() {
+        let s = two_spheres();
+        let mut tape = Tape::compile(&s).unwrap();
+        let mut t = s.clone();
+        t.root.children[0].shape = Call::new(Primitive::Box).into();
+        assert_eq!(tape.update_params(&t), Err(CompileError::StructureChanged));
+        let mut t = s.clone();
+        t.root.children.push(Node::new(Primitive::Sphere));
+        assert_eq!(tape.update_params(&t), Err(CompileError::StructureChanged));
+        assert_eq!(
+            tape,
+            Tape::compile(&s).unwrap(),
+            "a refused update leaves the tape intact"
+        );
+    }
+
+    #[test]
+    fn limits_are_checked_before_allocation() {
+        let mut deep = Node::new(Primitive::Sphere);
+        for _ in 0..limits::MAX_TREE_DEPTH {
+            deep = Node::new(Primitive::Sphere).child(deep);
+        }
+        let e = Tape::compile(&Scene::new(deep)).unwrap_err();
+        assert!(
+            matches!(&e, CompileError::Invalid(m) if m.contains("levels deep")),
+            "{e}"
+        );
+
+        let wide = Node {
+            children: vec![Node::new(Primitive::Sphere); limits::MAX_NODES],
+            ..Node::new(Primitive::Sphere)
+        };
+        let e = Tape::compile(&Scene::new(wide)).unwrap_err();
+        assert!(
+            matches!(&e, CompileError::Invalid(m) if m.contains("nodes")),
+            "{e}"
+        );
+
+        let mut s = two_spheres();
+        s.root.shape.params[0] = f64::NAN;
+        assert!(Tape::compile(&s).is_err());
+        s.root.shape.params[0] = -1.0;
+        assert!(Tape::compile(&s).is_err());
+    }
+
+    #[test]
+    fn ifs_loop_runs_its_iteration_count_and_zero_skips_it() {
+        let mut s = Scene::new(Node::new(Primitive::Sphere));
+        s.ifs = Some(Ifs {
+            iterations: 0,
+            ops: vec![Call::new(Transform::ScaleAbout)],
+        });
+        let t0 = Tape::compile(&s).unwrap();
+        assert_eq!(t0.eval_f64([2.0, 0.0, 0.0]).d, 1.0);
+        for n in [1, 2, 5] {
+            s.ifs.as_mut().unwrap().iterations = n;
+            let mut t = t0.clone();
+            t.update_params(&s).unwrap();
+            for p in [[2.0, 0.3, -0.1], [0.2, 0.1, 0.0]] {
+                assert_eq!(t.eval_f64(p).d, eval_tree(&s, p).d, "n = {n}");
+            }
+        }
+    }
+
+    #[test]
+    fn stack_depths_are_reported() {
+        let t = Tape::compile(&two_spheres()).unwrap();
+        assert_eq!(t.max_values(), 2);
+        assert_eq!(t.max_points(), 2);
+        assert_eq!(t.words().len(), 4 * t.instrs().len());
+        assert!(t.listing().contains("SmoothUnion"));
+    }
+}

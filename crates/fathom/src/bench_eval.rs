@@ -1,10 +1,183 @@
-//! `fathom bench eval`: throughput of the tape interpreter.
+//! `fathom bench eval`: throughput of the tape interpreter on one thread, per preset, for the
+//! exact f64 scalar path and the f32x8 packet path, plus the cost of compiling a 100-node tree
+//! and of a parameter-only update. Prints JSON.
 
 use clap::Args;
+use fathom_core::combine::Combine;
+use fathom_core::presets::PRESETS;
+use fathom_core::primitives::Primitive;
+use fathom_core::registry::Family;
+use fathom_core::scene::Call;
+use fathom_core::transforms::Transform;
+use fathom_core::{Evaluator, F32x8, Node, Real, Scene, Tape, V3};
+use serde_json::json;
+use std::hint::black_box;
+use std::time::{Duration, Instant};
 
 #[derive(Args)]
-pub struct EvalArgs {}
+pub struct EvalArgs {
+    /// Seconds spent measuring each figure.
+    #[arg(long, default_value_t = 0.5)]
+    seconds: f64,
+    /// Only these presets (comma-separated); default: all.
+    #[arg(long, value_delimiter = ',')]
+    presets: Vec<String>,
+}
 
-pub fn run(_a: EvalArgs) -> Result<(), String> {
-    Err("bench eval is not written yet".into())
+/// Deterministic sample points in a cube around the camera target, sized by the view distance,
+/// so each preset is measured where its camera looks.
+fn sample_points(scene: &Scene, n: usize) -> Vec<[f64; 3]> {
+    let c = scene.camera.target;
+    let half = 0.6 * (scene.camera.eye - c).length();
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    (0..n)
+        .map(|_| {
+            [
+                c.x + half * next(),
+                c.y + half * next(),
+                c.z + half * next(),
+            ]
+        })
+        .collect()
+}
+
+/// Runs `f` repeatedly for about `secs` seconds; returns calls per second.
+fn rate(secs: f64, mut f: impl FnMut()) -> f64 {
+    f(); // warm up
+    let budget = Duration::from_secs_f64(secs);
+    let start = Instant::now();
+    let mut calls = 0u64;
+    while start.elapsed() < budget {
+        f();
+        calls += 1;
+    }
+    calls as f64 / start.elapsed().as_secs_f64()
+}
+
+fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64) {
+    let mut e64 = Evaluator::<f64>::new();
+    let scalar = rate(secs, || {
+        for p in pts {
+            black_box(e64.distance(tape, V3::new(p[0], p[1], p[2])));
+        }
+    }) * pts.len() as f64;
+    let packets: Vec<V3<F32x8>> = pts
+        .chunks_exact(8)
+        .map(|c| {
+            let lane = |k: usize| F32x8::from_lanes(&c.iter().map(|p| p[k]).collect::<Vec<_>>());
+            V3::new(lane(0), lane(1), lane(2))
+        })
+        .collect();
+    let mut e32 = Evaluator::<F32x8>::new();
+    let packet = rate(secs, || {
+        for p in &packets {
+            black_box(e32.distance(tape, *p));
+        }
+    }) * (packets.len() * 8) as f64;
+    (scalar, packet)
+}
+
+/// A 100-node tree mixing every primitive, several operators and every combine.
+pub fn hundred_node_scene() -> Scene {
+    let prims = Primitive::all();
+    let combines = Combine::all();
+    let mut root = Node::new(Primitive::Sphere);
+    for i in 0..9 {
+        let mut branch = Node::new(prims[(i * 7 + 1) % prims.len()])
+            .combine(combines[i % combines.len()])
+            .op(Call::new(Transform::Translate).with("offset", &[i as f64 * 0.3, 0.0, 0.0]));
+        for j in 0..10 {
+            let k = i * 10 + j;
+            branch = branch.child(
+                Node::new(prims[k % prims.len()])
+                    .combine(combines[k % combines.len()])
+                    .op(Call::new(Transform::Rotate).with("angle", &[k as f64]))
+                    .op(Call::new(Transform::Scale).with("factor", &[0.5])),
+            );
+        }
+        root = root.child(branch);
+    }
+    Scene::new(root)
+}
+
+pub fn run(a: EvalArgs) -> Result<(), String> {
+    if !(a.seconds > 0.0 && a.seconds <= 60.0) {
+        return Err(format!("--seconds = {} is out of range (0, 60]", a.seconds));
+    }
+    for name in &a.presets {
+        fathom_core::presets::find(name)?;
+    }
+    let mut rows = Vec::new();
+    for p in PRESETS
+        .iter()
+        .filter(|p| a.presets.is_empty() || a.presets.iter().any(|n| n == p.name))
+    {
+        let scene = fathom_core::presets::load(p.name)?;
+        let tape = Tape::compile(&scene).map_err(|e| format!("{}: {e}", p.name))?;
+        let pts = sample_points(&scene, 4096);
+        let (scalar, packet) = eval_rates(&tape, &pts, a.seconds);
+        eprintln!(
+            "{:>18}: f64 {:>10.0}/s  f32x8 {:>11.0}/s  x{:.2}",
+            p.name,
+            scalar,
+            packet,
+            packet / scalar
+        );
+        rows.push(json!({
+            "preset": p.name,
+            "tape_len": tape.instrs().len(),
+            "f64_scalar_evals_per_s": scalar.round(),
+            "f32_packet_evals_per_s": packet.round(),
+            "packet_over_scalar": (packet / scalar * 100.0).round() / 100.0,
+        }));
+    }
+    let scene = hundred_node_scene();
+    let nodes = scene.root.count();
+    let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;
+    let compile = 1e6
+        / rate(a.seconds, || {
+            black_box(Tape::compile(black_box(&scene)).ok());
+        });
+    let mut edited = scene.clone();
+    let mut t2 = tape.clone();
+    let update = 1e6
+        / rate(a.seconds, || {
+            edited.root.shape.params[0] += 1e-9;
+            black_box(t2.update_params(&edited).ok());
+        });
+    let out = json!({
+        "bench": "eval",
+        "threads": 1,
+        "points_per_measurement": 4096,
+        "presets": rows,
+        "compile": {
+            "nodes": nodes,
+            "tape_len": tape.instrs().len(),
+            "compile_us": (compile * 10.0).round() / 10.0,
+            "update_params_us": (update * 10.0).round() / 10.0,
+        },
+    });
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hundred_node_scene_has_a_hundred_nodes_and_compiles() {
+        let s = hundred_node_scene();
+        assert_eq!(s.root.count(), 100);
+        Tape::compile(&s).unwrap();
+    }
 }
