@@ -118,9 +118,7 @@ fn describe(code: &ron::Error) -> String {
         E::ExpectedStructLike => "expected `(` opening a structure; write `Name()` to take \
                                   every default"
             .into(),
-        E::ExpectedNamedStructLike(name) if name.is_empty() => {
-            "expected `(` opening a structure".into()
-        }
+        E::ExpectedNamedStructLike("") => "expected `(` opening a structure".into(),
         E::ExpectedNamedStructLike(name) => format!("expected `{name}(...)` here"),
         E::ExpectedStructLikeEnd => {
             "expected `)` closing the structure, or a `,` before the next field".into()
