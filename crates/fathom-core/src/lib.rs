@@ -22,6 +22,8 @@ pub mod registry;
 pub mod scene;
 pub mod scene_file;
 pub mod tape;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 pub mod transforms;
 pub mod value;
 pub mod vec3;

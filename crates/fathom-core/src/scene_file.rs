@@ -237,4 +237,6 @@ pub fn save(path: &Path, scene: &Scene) -> Result<(), SceneFileError> {
 }
 
 #[cfg(test)]
+mod fuzz;
+#[cfg(test)]
 mod tests;

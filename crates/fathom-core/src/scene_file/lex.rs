@@ -216,15 +216,22 @@ pub fn scan(text: &str) -> Result<Vec<Token>, LexError> {
 }
 
 /// Refuses a decimal literal that overflows to infinity (as f64, or as f32 with an `f32`
-/// suffix). Literals that are not decimal floats (hex, malformed) are left to the parser.
+/// suffix), and hex, octal and binary literals (RON reads `0x0A` as `0` where a real number
+/// is expected). Other malformed literals are left to the parser.
 fn check_number(s: &str, pos: (usize, usize)) -> Result<(), LexError> {
     let clean: String = s.chars().filter(|&ch| ch != '_').collect();
     let (body, f32_suffix) = match clean.strip_suffix("f32") {
         Some(b) => (b, true),
         None => (clean.strip_suffix("f64").unwrap_or(&clean), false),
     };
-    if body.starts_with("0x") || body.starts_with("0b") || body.starts_with("0o") {
-        return Ok(());
+    if ["0x", "0b", "0o", "0X", "0B", "0O"]
+        .iter()
+        .any(|p| body.starts_with(p))
+    {
+        return Err(LexError {
+            pos,
+            msg: format!("write numbers in decimal: `{s}` is not a decimal number"),
+        });
     }
     let Ok(v) = body.parse::<f64>() else {
         return Ok(());
@@ -279,7 +286,8 @@ mod tests {
         assert_eq!(scan("(x: -inf)").unwrap_err().pos, (1, 6));
         assert_eq!(scan("(x: 1e999)").unwrap_err().pos, (1, 5));
         assert_eq!(scan("(x: 1e39f32)").unwrap_err().pos, (1, 5));
-        assert!(scan("(x: 1e38f32, y: 1e308, z: 0x7f)").is_ok());
+        assert!(scan("(x: 1e38f32, y: 1e308, z: 1_000.5)").is_ok());
+        assert!(scan("(x: 0x7f)").unwrap_err().msg.contains("decimal"));
     }
 
     #[test]
