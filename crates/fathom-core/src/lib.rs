@@ -10,6 +10,7 @@
 pub mod call_serde;
 pub mod camera;
 pub mod combine;
+pub mod docgen;
 pub mod eval;
 pub mod fractals;
 pub mod limits;
