@@ -23,6 +23,8 @@ pub mod registry;
 pub mod scene;
 pub mod scene_file;
 pub mod tape;
+#[cfg(test)]
+mod tape_props;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod transforms;
