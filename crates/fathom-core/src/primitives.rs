@@ -204,8 +204,8 @@ crate::declare_family! {
             l.max(S::select(s.lt(S::zero()), -m, m))
         };
 
-    /// A sphere with the cap above the plane `y = cut` cut off (`cut >= radius` keeps the
-    /// whole sphere, `cut <= -radius` leaves a point).
+    /// The part of a sphere above the plane `y = cut` (a flat bottom; `cut <= -radius` keeps
+    /// the whole sphere, `cut >= radius` leaves a point).
     CutSphere [Exact] (
         radius: Scalar = 1.0, [0.0, BIG], "radius of the sphere",
         cut: Scalar = 0.5, [-BIG, BIG], "height of the cutting plane",
@@ -218,13 +218,12 @@ crate::declare_family! {
             let ds = len2(qx, qy) - radius;
             let cut_d = S::select(qx.lt(w), h - qy, len2(qx - w, qy - h));
             let d = S::select(s.lt(S::zero()), ds, cut_d);
-            let d = S::select(h.ge(radius), ds, d);
-            S::select(h.le(-radius), len2(qx, qy - h), d)
+            S::select(h.le(-radius), ds, d)
         };
 
     /// A spherical shell of `radius` and half-thickness `thickness`, with the cap above
-    /// `y = cut` removed. Exact outside; a bound inside when the shell is thick against the
-    /// opening.
+    /// `y = cut` removed (an open bowl; `cut >= radius` keeps the whole shell). Exact outside;
+    /// a bound inside when the shell is thick against the opening.
     CutHollowSphere [Bound] (
         radius: Scalar = 1.0, [0.0, BIG], "radius of the sphere",
         cut: Scalar = 0.5, [-BIG, BIG], "height of the cutting plane",
@@ -253,14 +252,13 @@ crate::declare_family! {
             S::select(rim, len2(qx - ca, qy - cb), carved)
         };
 
-    /// An axis-aligned ellipsoid with semi-axes `radii` (iq's `k0 (k0 - 1) / k1` bound).
+    /// An axis-aligned ellipsoid with semi-axes `radii`, by the larger of two provable bounds:
+    /// `(|p / radii| - 1) * min(radii)` and `|p| - max(radii)`. (iq's sharper
+    /// `k0 (k0 - 1) / k1` is not 1-Lipschitz: the tests found slopes above 1.03.) Exact on the
+    /// longest and shortest axes' ends for a sphere; an underestimate elsewhere.
     Ellipsoid [Bound] (radii: Vec3 = [1.0, 0.5, 0.75], [0.0, BIG], "semi-axes along x, y, z")
-        baked(bake_ellipsoid) (inv_r: Vec3, inv_r2: Vec3)
-        => {
-            let k0 = (p * inv_r).length();
-            let k1 = (p * inv_r2).length();
-            k0 * (k0 - S::one()) / k1.max(S::splat(1e-20))
-        };
+        baked(bake_ellipsoid) (inv_r: Vec3, min_r: Scalar, max_r: Scalar)
+        => (((p * inv_r).length() - S::one()) * min_r).max(p.length() - max_r);
 
     /// A rhombus slab: half-diagonals `half_x` and `half_z` in the xz plane, half-thickness
     /// `half_height` along y, the outline grown by `radius` (rounded corners).
@@ -324,8 +322,15 @@ crate::declare_family! {
         let by = qy - m2 * t;
         let b = m2 * bq * bq + by * by;
         let d2 = S::select(qy.min(-qx * m2 - qy * half).gt(S::zero()), S::zero(), a.min(b));
-        let d = ((d2 + qz * qz) / m2).sqrt() * base;
-        S::select(qz.max(-py).lt(S::zero()), -d, d)
+        // iq's formula measures the slanted faces only; the base is added here: below the
+        // base plane the nearest point is on the base square, inside the depth is at most
+        // the height above the base.
+        let lateral = ((d2 + qz * qz) / m2).sqrt();
+        let inside = qz.max(-py).lt(S::zero());
+        let (bx, bz) = ((ax - half).max(S::zero()), (az - half).max(S::zero()));
+        let below = (bx * bx + bz * bz + py * py).sqrt();
+        let d = S::select(py.lt(S::zero()), below, S::select(inside, (-lateral).max(-py), lateral));
+        d * base
     };
 
     /// A flat triangle with corners `a`, `b`, `c` (unsigned distance: it has no inside).
@@ -496,6 +501,7 @@ fn bake_unit_normal(user: &[f64], out: &mut Vec<f64>) {
 fn bake_cut_sphere(user: &[f64], out: &mut Vec<f64>) {
     let r = user[0];
     let h = user[1].clamp(-r, r);
+    // Exactly at `-r` the formula's axis case is wrong; the code selects the sphere there.
     out.extend_from_slice(&[r, h, (r * r - h * h).max(0.0).sqrt()]);
 }
 
@@ -515,11 +521,12 @@ fn bake_death_star(user: &[f64], out: &mut Vec<f64>) {
     out.extend_from_slice(&[ra, rb, d, a, b]);
 }
 
-/// Semi-axes -> their reciprocals and squared reciprocals (zero axes become 1e-9).
+/// Semi-axes -> their reciprocals, the smallest and the largest (zero axes become 1e-9).
 fn bake_ellipsoid(user: &[f64], out: &mut Vec<f64>) {
     let r: Vec<f64> = user.iter().map(|&v| v.max(1e-9)).collect();
     out.extend(r.iter().map(|v| 1.0 / v));
-    out.extend(r.iter().map(|v| 1.0 / (v * v)));
+    out.push(r.iter().copied().fold(f64::INFINITY, f64::min));
+    out.push(r.iter().copied().fold(0.0, f64::max));
 }
 
 /// `[half_width, half_height]` -> `[arc radius, arc centre offset, tip height]`.
@@ -533,3 +540,8 @@ fn bake_vesica(user: &[f64], out: &mut Vec<f64>) {
     let r = (b * b + w * w) / (2.0 * w);
     out.extend_from_slice(&[r, r - w, b]);
 }
+
+#[cfg(test)]
+pub(crate) mod testkit;
+#[cfg(test)]
+mod tests;
