@@ -14,8 +14,11 @@ fn apply(t: Transform, a: &[f64], p: [f64; 3]) -> ([f64; 3], f64) {
     ([q.x, q.y, q.z], k)
 }
 
+/// A named local-frame distance function.
+type Shape = (&'static str, fn(V3<f64>) -> f64);
+
 /// Unit sphere and unit box: the shapes the operators are composed with.
-fn shapes() -> [(&'static str, fn(V3<f64>) -> f64); 2] {
+fn shapes() -> [Shape; 2] {
     [
         ("unit sphere", |p| p.length() - 1.0),
         ("unit box", |p| {
