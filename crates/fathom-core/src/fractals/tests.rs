@@ -90,12 +90,14 @@ fn every_fractal_has_finite_estimates_everywhere() {
     }
 }
 
-/// Worst `|f(a) - f(b)| / |a - b|` over random pairs near the fractal, at the given parameters.
-fn worst_lipschitz_ratio(f: Fractal, a: &[f64], seed: u64, pairs: usize) -> (f64, [f64; 3]) {
+/// Worst `|f(a) - f(b)| / |a - b|` over random pairs near the fractal, at the given parameters,
+/// where it was found, and how many pairs exceeded `1 + 1e-6`.
+fn lipschitz_stats(f: Fractal, a: &[f64], seed: u64, pairs: usize) -> (f64, [f64; 3], usize) {
     let mut rng = Rng(seed);
     let r = extent(f) * 1.2;
     let mut worst = (0.0, [0.0; 3]);
-    for i in 0..pairs {
+    let mut over = 0;
+    for _ in 0..pairs {
         let p = rng.point(r);
         let u = rng.dir();
         // Separations from 1e-4 to 0.3, log-uniform, so both fine detail and large steps count.
@@ -105,34 +107,65 @@ fn worst_lipschitz_ratio(f: Fractal, a: &[f64], seed: u64, pairs: usize) -> (f64
         if ratio > worst.0 {
             worst = (ratio, p);
         }
-        let _ = i;
+        over += usize::from(ratio > 1.0 + 1e-6);
     }
-    worst
+    (worst.0, worst.1, over)
 }
 
+/// `Bound` entries must satisfy `|f(a) - f(b)| <= |a - b| (1 + 1e-6)` on every sampled pair.
+/// `Safety` entries (the escape-time estimators, whose overestimate is heavy-tailed) must do so
+/// on all but 5e-4 of the pairs at their default `safety`; their worst ratio is reported.
 #[test]
 fn lipschitz_on_random_pairs() {
-    let mut report = Vec::new();
+    use crate::registry::Quality;
+    const PAIRS: usize = 20_000;
     for &f in Fractal::ALL {
         let a = params(f, &[]);
-        let (ratio, at) = worst_lipschitz_ratio(f, &a, 7 + f.index() as u64, 20_000);
-        report.push(format!("{:?}: worst ratio {ratio:.6} at {at:?}", f));
+        let (worst, at, over) = lipschitz_stats(f, &a, 7 + f.index() as u64, PAIRS);
+        eprintln!(
+            "{f:?}: worst ratio {worst:.6} at {at:?}; {over} of {PAIRS} pairs above 1 + 1e-6"
+        );
+        match f.def().quality {
+            Quality::Exact | Quality::Bound => {
+                assert_eq!(over, 0, "{f:?}: worst ratio {worst} at {at:?}")
+            }
+            Quality::Safety => assert!(
+                over as f64 <= 5e-4 * PAIRS as f64,
+                "{f:?}: {over} pairs above 1, worst {worst} at {at:?}"
+            ),
+        }
     }
-    let text = report.join("\n");
-    eprintln!("{text}");
-    // Work in progress: the escape-time estimators still need their safety factors.
-    for (f, r) in Fractal::ALL.iter().zip(&report) {
-        if !matches!(f, Fractal::Mandelbulb | Fractal::Mandelbox) {
-            let ratio: f64 = r
-                .split("ratio ")
-                .nth(1)
-                .unwrap()
-                .split(' ')
-                .next()
-                .unwrap()
-                .parse()
-                .unwrap();
-            assert!(ratio <= 1.0 + 1e-6, "{r}");
+}
+
+/// The folding fractals stay 1-Lipschitz away from their defaults too (random offsets,
+/// scales and rotations), as the continuity argument of the module doc says.
+#[test]
+fn folding_fractals_are_lipschitz_at_random_parameters() {
+    let mut rng = Rng(21);
+    for &f in Fractal::ALL {
+        if matches!(f.def().quality, crate::registry::Quality::Safety) {
+            continue;
+        }
+        for trial in 0..4 {
+            let def = f.def();
+            let mut user = def.defaults();
+            for spec in def.params {
+                let (off, _) = def.param(spec.name).unwrap();
+                for v in &mut user[off..off + spec.kind.width()] {
+                    *v = match spec.name {
+                        "iterations" => rng.range(1.0, 8.0).floor(),
+                        "scale" => rng.range(1.2, 3.5),
+                        "offset" => rng.range(-1.2, 1.2),
+                        "rotation" | "twist" => rng.range(-60.0, 60.0),
+                        _ => *v,
+                    };
+                }
+            }
+            def.check(&user).unwrap();
+            let mut a = Vec::new();
+            def.bake_into(&user, &mut a);
+            let (worst, at, over) = lipschitz_stats(f, &a, 100 + trial, 3000);
+            assert_eq!(over, 0, "{f:?} {user:?}: worst {worst} at {at:?}");
         }
     }
 }
@@ -265,12 +298,12 @@ fn mandelbulb_power8_fast_path_matches_trig_form() {
     let (t, f) = mandelbulb::steps_for_test(V3::zero(), V3::new(0.1, 0.2, 0.3));
     assert_eq!((t, f), (V3::new(0.1, 0.2, 0.3), V3::new(0.1, 0.2, 0.3)));
     // Whole estimates: the same to 1e-6 relative.
-    let a = params(Fractal::Mandelbulb, &[]);
+    let a = params(Fractal::Mandelbulb, &[("safety", &[0.8])]);
     let mut worst = 0.0f64;
     for _ in 0..20_000 {
         let p = rng.point(1.5);
-        let fast = d(Fractal::Mandelbulb, &a, p);
-        let (trig, _) = mandelbulb::mandelbulb_trig_for_test(V3::new(p[0], p[1], p[2]), 12, 2.0);
+        let fast = d(Fractal::Mandelbulb, &a, p) / 0.8;
+        let (trig, _) = mandelbulb::mandelbulb_trig_for_test(V3::new(p[0], p[1], p[2]), 12, 4.0);
         worst = worst.max((fast - trig).abs() / trig.abs().max(1e-3));
     }
     eprintln!("power-8 estimate: worst relative difference {worst:e}");
