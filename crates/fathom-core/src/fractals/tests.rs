@@ -309,3 +309,201 @@ fn mandelbulb_power8_fast_path_matches_trig_form() {
     eprintln!("power-8 estimate: worst relative difference {worst:e}");
     assert!(worst < 1e-6, "{worst}");
 }
+
+/// The parameters of `f` with `iterations` set.
+fn at_depth(f: Fractal, n: usize) -> Vec<f64> {
+    params(f, &[("iterations", &[n as f64])])
+}
+
+#[test]
+fn menger_holes_tunnels_and_corners() {
+    let f = Fractal::Menger;
+    // Depth 0 is the cube [-1, 1]^3 itself.
+    let a0 = at_depth(f, 0);
+    assert!((d(f, &a0, [2.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
+    assert!((d(f, &a0, [0.0, 0.0, 0.0]) + 1.0).abs() < 1e-12);
+    for n in 1..=6 {
+        let a = at_depth(f, n);
+        // The centre is removed; the nearest solid is an edge cube's edge at (1/3, 1/3, 0).
+        let c = d(f, &a, [0.0, 0.0, 0.0]);
+        assert!(
+            (c - 2f64.sqrt() / 3.0).abs() < 1e-12,
+            "depth {n}: centre {c}"
+        );
+        // The three first-level tunnels run right through: every point whose two other
+        // coordinates are within 1/3 of the axis is outside, including each face centre.
+        let mut rng = Rng(40 + n as u64);
+        for axis in 0..3 {
+            for _ in 0..500 {
+                let mut p = [rng.range(-0.32, 0.32), rng.range(-0.32, 0.32), 0.0];
+                p.rotate_right(axis);
+                p[axis] = rng.range(-1.5, 1.5);
+                assert!(
+                    d(f, &a, p) > 0.0,
+                    "depth {n}: tunnel point {p:?} is not outside"
+                );
+            }
+            let mut face = [0.0; 3];
+            face[axis] = 1.0;
+            assert!(d(f, &a, face) > 0.3, "depth {n}: face centre {face:?}");
+        }
+        // The corners are fixed points of the IFS: on the surface at every depth, and a point
+        // just inside a corner is inside.
+        for s in 0..8 {
+            let sg = [s & 1, s & 2, s & 4].map(|b| if b == 0 { 1.0 } else { -1.0 });
+            assert!(d(f, &a, sg).abs() < 1e-12, "depth {n}: corner {sg:?}");
+            let inside = sg.map(|c| c * (1.0 - 1e-3 / 3f64.powi(n as i32)));
+            assert!(d(f, &a, inside) <= 0.0, "depth {n}: {inside:?}");
+        }
+        // The centre of a corner sub-cube is solid at depth 1 and a hole from depth 2 on.
+        let sub = d(f, &a, [2.0 / 3.0; 3]);
+        assert!(
+            if n == 1 { sub < 0.0 } else { sub > 0.0 },
+            "depth {n}: sub-cube centre {sub}"
+        );
+    }
+}
+
+#[test]
+fn sierpinski_vertices_edges_and_removed_octahedron() {
+    let f = Fractal::Sierpinski;
+    let verts = [
+        [1.0, 1.0, 1.0],
+        [-1.0, -1.0, 1.0],
+        [1.0, -1.0, -1.0],
+        [-1.0, 1.0, -1.0],
+    ];
+    for n in 0..=12 {
+        let a = at_depth(f, n);
+        // Tolerance shrinking like scale^-n: the surface detail at depth n.
+        let tol = 1e-9 * 2f64.powi(-(n as i32));
+        for v in verts {
+            assert!(
+                d(f, &a, v).abs() <= tol,
+                "depth {n}: vertex {v:?}: {}",
+                d(f, &a, v)
+            );
+        }
+        // Edge midpoints are vertices of the depth-1 copies, so on the surface too.
+        for m in [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]] {
+            assert!(d(f, &a, m).abs() <= tol, "depth {n}: edge midpoint {m:?}");
+        }
+        let c = d(f, &a, [0.0, 0.0, 0.0]);
+        if n == 0 {
+            // The solid tetrahedron: the centre is 1/sqrt 3 deep.
+            assert!((c + 1.0 / 3f64.sqrt()).abs() < 1e-12);
+        } else {
+            // The centre of the removed octahedron |x|+|y|+|z| <= 1, 1/sqrt 3 from its faces.
+            assert!(
+                (c - 1.0 / 3f64.sqrt()).abs() < 1e-12,
+                "depth {n}: centre {c}"
+            );
+        }
+    }
+}
+
+#[test]
+fn mandelbulb_inside_on_axes_and_outside_far() {
+    let f = Fractal::Mandelbulb;
+    let a = params(f, &[]);
+    for p in [
+        [0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.3],
+        [0.0, 0.0, -0.3],
+        [0.3, 0.0, 0.0],
+        [0.0, -0.3, 0.0],
+    ] {
+        assert!(
+            d(f, &a, p) <= 0.0,
+            "{p:?} should be inside: {}",
+            d(f, &a, p)
+        );
+    }
+    for p in [[3.0, 0.0, 0.0], [0.0, 0.0, 5.0], [2.0, 2.0, -2.0]] {
+        let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        let v = d(f, &a, p);
+        // The bulb lies within radius 1.2, so the true distance is at least r - 1.2.
+        assert!(v > 0.0 && v <= r - 1.0, "{p:?}: {v}");
+    }
+}
+
+#[test]
+fn mandelbox_origin_inside_and_far_point_escapes() {
+    let f = Fractal::Mandelbox;
+    for scale in [-1.5, 2.0] {
+        let a = params(f, &[("scale", &[scale])]);
+        // The origin is a fixed point of every fold and of z -> scale z + 0.
+        assert_eq!(est(f, &a, [0.0; 3]), (0.0, 0.0));
+        // Far away the first iteration already escapes: z = scale * fold(p) + p.
+        let v = d(f, &a, [200.0, 0.0, 0.0]);
+        assert!(v > 20.0 && v < 200.0, "scale {scale}: {v}");
+    }
+    // The default box fits in |x|, |y|, |z| < 2.2: points beyond are outside.
+    let a = params(f, &[]);
+    let mut rng = Rng(50);
+    for _ in 0..2000 {
+        let mut p = rng.point(3.0);
+        p[rng.next_u64() as usize % 3] = 2.2 * rng.range(1.0, 1.3).copysign(rng.range(-1.0, 1.0));
+        assert!(d(f, &a, p) > 0.0, "{p:?}");
+    }
+}
+
+#[test]
+fn koch_vertices_peaks_and_centre() {
+    let f = Fractal::Koch;
+    let h0 = 1.0 / 3f64.sqrt();
+    for n in 0..=7 {
+        for twist in [0.0, 90.0] {
+            let a = params(f, &[("iterations", &[n as f64]), ("twist", &[twist])]);
+            let radius = 0.15 / 3f64.powi(n as i32);
+            // The triangle's corners are on the curve at every depth.
+            for ang in [30f64, 150.0, 270.0] {
+                let r = 2.0 / 3f64.sqrt();
+                let (s, c) = ang.to_radians().sin_cos();
+                let v = d(f, &a, [r * c, r * s, 0.0]);
+                assert!(
+                    (v + radius).abs() < 1e-12,
+                    "depth {n} twist {twist}: corner {ang}: {v}"
+                );
+            }
+            if n >= 1 {
+                // The peak of the first bump on each edge, and the inner vertices.
+                assert!((d(f, &a, [0.0, 2.0 * h0, 0.0]) + radius).abs() < 1e-12);
+                assert!((d(f, &a, [1.0 / 3.0, h0, 0.0]) + radius).abs() < 1e-12);
+                // From the centre the nearest curve points are the inner vertices (1/3, h0).
+                if twist == 0.0 {
+                    let c = d(f, &a, [0.0; 3]) + radius;
+                    assert!((c - 2.0 / 3.0).abs() < 1e-12, "depth {n}: centre {c}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn kifs_polyhedra_vertices_and_centres() {
+    for (f, origin_outside) in [
+        (Fractal::KifsOctahedron, false),
+        (Fractal::KifsIcosahedron, true),
+        (Fractal::KifsDodecahedron, true),
+    ] {
+        let def = f.def();
+        let (off, _) = def.param("offset").unwrap();
+        let vertex = &def.defaults()[off..off + 3];
+        for n in 0..=6 {
+            let a = at_depth(f, n);
+            // The offset is a fixed point of the IFS and a vertex of the base solid.
+            let v = d(f, &a, [vertex[0], vertex[1], vertex[2]]);
+            assert!(v.abs() < 1e-9, "{f:?} depth {n}: vertex {v}");
+            let o = d(f, &a, [0.0; 3]);
+            if n == 0 {
+                assert!(o < 0.0, "{f:?}: the solid's centre is inside");
+            } else if origin_outside {
+                assert!(o > 0.0, "{f:?} depth {n}: centre {o}");
+            } else {
+                // The six octahedra of the flake meet at the centre.
+                assert!(o.abs() < 1e-9, "{f:?} depth {n}: centre {o}");
+            }
+        }
+    }
+}
