@@ -75,9 +75,14 @@ pub fn kind_name(kind: ParamKind) -> &'static str {
     }
 }
 
-/// One number as a scene file would show it (whole numbers without a fraction).
+/// One number as a scene file would show it (whole numbers without a fraction, exponents for
+/// very large or small magnitudes).
 pub fn fmt_value(x: f64) -> String {
-    fmt_num(x)
+    if x != 0.0 && x.abs() < 1e-3 {
+        format!("{x:e}")
+    } else {
+        fmt_num(x)
+    }
 }
 
 /// The default as written in a scene file: `1`, `(0, 1, 0)`.
@@ -103,6 +108,15 @@ pub fn fmt_range(spec: &ParamSpec) -> String {
 /// The first line of an entry's doc.
 pub fn first_line(doc: &str) -> &str {
     doc.lines().next().unwrap_or("").trim()
+}
+
+/// The first sentence of an entry's doc (up to the first `. `), for one-line listings.
+pub fn summary(doc: &str) -> String {
+    let p = paragraph(doc);
+    match p.find(". ") {
+        Some(i) => p[..=i].to_string(),
+        None => p,
+    }
 }
 
 /// The doc as one paragraph.
