@@ -234,3 +234,14 @@ fn load_and_save_round_trip_through_a_file() {
     assert!(matches!(missing, SceneFileError::Io { .. }));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_worked_example_in_the_format_guide_parses_and_compiles() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/scene-format.md");
+    let md = std::fs::read_to_string(&path).unwrap();
+    let start = md.find("```ron\n").expect("a ron block") + "```ron\n".len();
+    let end = start + md[start..].find("```").unwrap();
+    let scene = parse(&md[start..end], "scene-format.md").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.root.children.len(), 2);
+    crate::tape::Tape::compile(&scene).unwrap();
+}
