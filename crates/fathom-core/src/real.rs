@@ -103,10 +103,12 @@ pub trait Real:
     fn one() -> Self {
         Self::splat(1.0)
     }
-    /// Linear interpolation `a + (b - a) * t`.
+    /// Linear interpolation, exact at both ends: `a (1 - t) + b t`. (The shorter
+    /// `a + (b - a) t` cancels catastrophically in f32 when `|a - b|` dwarfs `b`, e.g. a smooth
+    /// union of a near shape with one a billion units away.)
     #[inline(always)]
     fn lerp(a: Self, b: Self, t: Self) -> Self {
-        a + (b - a) * t
+        a * (Self::one() - t) + b * t
     }
 }
 

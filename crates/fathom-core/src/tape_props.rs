@@ -14,25 +14,55 @@ fn arb_point() -> impl Strategy<Value = [f64; 3]> {
 }
 
 /// Scale factors far from 1 amplify f32 rounding by the accumulated scale (a `ScaleAbout` by
-/// 1e-6 multiplies distances by 1e6), so the packet path is only compared on scenes whose
-/// scale factors lie in [0.1, 10].
+/// 1e-6 multiplies distances by 1e6; an IFS loop compounds its factor each iteration), so the
+/// packet path is only compared on scenes whose accumulated scale stays within [1e-2, 1e2]
+/// and whose IFS loop is not chaotic.
 fn well_conditioned(scene: &Scene) -> bool {
-    fn ok<K: Family>(c: &crate::scene::Call<K>) -> bool {
-        c.get("factor").is_none_or(|f| (0.1..=10.0).contains(&f[0]))
+    fn factor<K: Family>(c: &crate::scene::Call<K>) -> f64 {
+        c.get("factor").map_or(1.0, |f| f[0])
     }
-    fn node(n: &Node) -> bool {
-        n.ops.iter().all(ok) && n.children.iter().all(node)
+    fn node(n: &Node, acc: f64) -> bool {
+        let acc = n.ops.iter().fold(acc, |a, o| a * factor(o));
+        (1e-2..=1e2).contains(&acc) && n.children.iter().all(|c| node(c, acc))
     }
-    node(&scene.root) && scene.ifs.as_ref().is_none_or(|i| i.ops.iter().all(ok))
+    // Iterating a non-linear map (twist, bend) is chaotic: rounding grows exponentially.
+    let chaotic = scene.ifs.as_ref().is_some_and(|i| {
+        i.iterations > 1
+            && i.ops
+                .iter()
+                .any(|o| matches!(o.kind.def().name, "Twist" | "Bend"))
+    });
+    let ifs = scene.ifs.as_ref().map_or(1.0, |i| {
+        i.ops
+            .iter()
+            .fold(1.0, |a, o| a * factor(o))
+            .powi(i.iterations as i32)
+    });
+    !chaotic && (1e-2..=1e2).contains(&ifs) && node(&scene.root, ifs)
 }
 
-fn has_fractal(n: &Node) -> bool {
-    matches!(n.shape.kind, Shape::Fractal(_)) || n.children.iter().any(has_fractal)
+/// Fractals (escape counts) and repetition (cell index by rounding) are discontinuous in the
+/// point: f32 rounding near a jump legitimately lands on the other side.
+fn has_discontinuity(scene: &Scene) -> bool {
+    fn repeats<K: Family>(c: &crate::scene::Call<K>) -> bool {
+        c.kind.def().name.starts_with("Repeat")
+    }
+    fn node(n: &Node) -> bool {
+        matches!(n.shape.kind, Shape::Fractal(_))
+            || n.ops.iter().any(repeats)
+            || n.children.iter().any(node)
+    }
+    node(&scene.root)
+        || scene
+            .ifs
+            .as_ref()
+            .is_some_and(|i| i.ops.iter().any(repeats))
 }
 
 proptest! {
     #![proptest_config(ProptestConfig {
         cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(192),
+        max_global_rejects: 1 << 20,
         ..ProptestConfig::default()
     })]
 
@@ -51,9 +81,8 @@ proptest! {
         }
     }
 
-    /// The f32x8 packet path agrees with the f64 path. Escape-time fractals can flip between
-    /// iterations near their surface under f32 rounding, so scenes with fractals must agree on
-    /// at least 7 of 8 lanes; others on every lane.
+    /// The f32x8 packet path agrees with the f64 path: on every lane, or on 7 of 8 for scenes
+    /// with a discontinuity (fractal escape counts, repetition cells).
     #[test]
     fn packet_path_matches_f64(scene in arb_scene(Mode::Valid), pts in prop::collection::vec(arb_point(), 8)) {
         prop_assume!(well_conditioned(&scene));
@@ -73,7 +102,7 @@ proptest! {
                 bad += 1;
             }
         }
-        let allowed = if has_fractal(&scene.root) { 1 } else { 0 };
+        let allowed = if has_discontinuity(&scene) { 1 } else { 0 };
         prop_assert!(bad <= allowed, "{} of 8 lanes disagree\n{}\n{:?}", bad, tape.listing(), tape.params());
     }
 }
