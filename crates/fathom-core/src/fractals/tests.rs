@@ -577,3 +577,56 @@ fn packet_agrees_with_scalar_near_the_surface() {
         );
     }
 }
+
+/// The depth-n Koch snowflake as an explicit polyline (counter-clockwise, bumps outward).
+fn koch_polyline(n: usize) -> Vec<[f64; 2]> {
+    let h0 = 1.0 / 3f64.sqrt();
+    let mut pts = vec![[1.0, h0], [-1.0, h0], [0.0, -2.0 * h0], [1.0, h0]];
+    let (s, c) = (-60f64).to_radians().sin_cos();
+    for _ in 0..n {
+        let mut next = vec![pts[0]];
+        for w in pts.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let t = [(b[0] - a[0]) / 3.0, (b[1] - a[1]) / 3.0];
+            let p1 = [a[0] + t[0], a[1] + t[1]];
+            let peak = [p1[0] + c * t[0] - s * t[1], p1[1] + s * t[0] + c * t[1]];
+            next.extend([p1, peak, [a[0] + 2.0 * t[0], a[1] + 2.0 * t[1]], b]);
+        }
+        pts = next;
+    }
+    pts
+}
+
+/// At twist 0 the Koch estimate is the exact distance to the explicit polyline, minus the
+/// tube radius.
+#[test]
+fn koch_matches_the_explicit_polyline() {
+    let f = Fractal::Koch;
+    let mut rng = Rng(70);
+    for n in 0..=4 {
+        let a = at_depth(f, n);
+        let line = koch_polyline(n);
+        assert_eq!(line.len(), 3 * 4usize.pow(n as u32) + 1);
+        let radius = 0.15 / 3f64.powi(n as i32);
+        for _ in 0..400 {
+            let p = rng.point(1.4);
+            let mut best = f64::MAX;
+            for w in line.windows(2) {
+                let (a0, b0) = (w[0], w[1]);
+                let ab = [b0[0] - a0[0], b0[1] - a0[1]];
+                let ap = [p[0] - a0[0], p[1] - a0[1]];
+                let t = ((ap[0] * ab[0] + ap[1] * ab[1]) / (ab[0] * ab[0] + ab[1] * ab[1]))
+                    .clamp(0.0, 1.0);
+                let dx = ap[0] - t * ab[0];
+                let dy = ap[1] - t * ab[1];
+                best = best.min((dx * dx + dy * dy + p[2] * p[2]).sqrt());
+            }
+            let got = d(f, &a, p);
+            assert!(
+                (got - (best - radius)).abs() < 1e-9,
+                "depth {n} at {p:?}: {got} vs {}",
+                best - radius
+            );
+        }
+    }
+}
