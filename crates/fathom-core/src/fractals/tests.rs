@@ -246,7 +246,7 @@ fn icosahedral_fold_gives_the_polyhedra() {
     assert_eq!(ico.len(), 12);
     assert_eq!(dod.len(), 20);
     let mut rng = Rng(12);
-    for _ in 0..20_000 {
+    for _ in 0..200_000 {
         let p = rng.point(2.0);
         let v = V3::new(p[0], p[1], p[2]);
         let q = ifs::for_test::icosahedral_fold(v);
