@@ -511,12 +511,11 @@ fn degenerate_parameters_give_finite_lipschitz_fields() {
                 );
                 let ps: [[f64; 3]; 8] = std::array::from_fn(|_| rng.cube(2.0));
                 let d8 = k.distance::<F32x8>(pack(&ps), &a);
-                for i in 0..8 {
+                for (i, p) in ps.iter().enumerate() {
                     assert!(
                         lane(d8, i).is_finite(),
-                        "{} {user:?} f32x8 at {:?}",
-                        def.name,
-                        ps[i]
+                        "{} {user:?} f32x8 at {p:?}",
+                        def.name
                     );
                 }
             }
