@@ -387,7 +387,9 @@ fn exact_primitives_are_eikonal_and_project_onto_the_surface() {
         if def.quality != Quality::Exact || def.name == "Empty" {
             continue;
         }
-        for user in param_sets(def, &mut rng, 6) {
+        let mut sets = param_sets(def, &mut rng, 6);
+        sets.extend((0..6).map(|_| wide_params(def, &mut rng)));
+        for user in sets {
             let a = baked(def, &user);
             let f = |p: [f64; 3]| eval(k, &a, p);
             let mut smooth = 0;
@@ -456,7 +458,9 @@ fn every_primitive_packet_path_matches_f64() {
     let mut rng = Rng::new(5);
     for &k in Primitive::ALL {
         let def = k.def();
-        for user in param_sets(def, &mut rng, 2) {
+        let mut sets = param_sets(def, &mut rng, 2);
+        sets.extend((0..4).map(|_| wide_params(def, &mut rng)));
+        for user in sets {
             let a = baked(def, &user);
             for _ in 0..200 {
                 let ps: [[f64; 3]; 8] = std::array::from_fn(|_| rng.cube(2.5));
