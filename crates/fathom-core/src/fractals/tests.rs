@@ -455,7 +455,7 @@ fn koch_vertices_peaks_and_centre() {
     for n in 0..=7 {
         for twist in [0.0, 90.0] {
             let a = params(f, &[("iterations", &[n as f64]), ("twist", &[twist])]);
-            let radius = 0.15 / 3f64.powi(n as i32);
+            let radius = 0.15 / 3f64.powi(n);
             // The triangle's corners are on the curve at every depth.
             for ang in [30f64, 150.0, 270.0] {
                 let r = 2.0 / 3f64.sqrt();
