@@ -173,7 +173,17 @@ fn invalid_scenes_name_the_node_path() {
         "shape: Sphere, children: [Node(shape: Sphere, material: Material(specular: 3.0))],",
     );
     let e = parse(&text, "t.ron").unwrap_err().to_string();
-    assert!(e.starts_with("t.ron: root.children[0].material"), "{e}");
+    assert!(
+        e.starts_with("t.ron:4:55: root.children[0].material"),
+        "{e}"
+    );
+    // Rules with no place in the text keep the file name only.
+    let lights = BASE.replace(
+        "version: 1,",
+        &format!("version: 1, lights: [{}],", "Light(),".repeat(9)),
+    );
+    let e = parse(&lights, "t.ron").unwrap_err().to_string();
+    assert!(e.starts_with("t.ron: 9 lights; the limit is 8"), "{e}");
 }
 
 #[test]
