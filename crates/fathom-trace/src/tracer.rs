@@ -30,7 +30,9 @@ pub enum Method {
 }
 
 /// Over-relaxation factor of the enhanced tracer (Keinert et al. suggest 1.2 to 1.6 for
-/// distance bounds).
+/// distance bounds). Measured on the Mandelbulb at 640x480 (depth evaluations per pixel; basic
+/// 25.2): without the prepass 1.2 gives 20.9 and 1.5 gives 26.1; with the prepass (basic 11.6)
+/// 1.2 gives 10.2 and 1.5 gives 9.6. Rendering uses the prepass by default, hence 1.5.
 pub const OMEGA: f64 = 1.5;
 
 /// How one march behaves.

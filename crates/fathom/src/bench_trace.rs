@@ -1,5 +1,5 @@
 //! `fathom bench trace`: renders every preset with basic, enhanced and enhanced+prepass tracing
-//! and prints JSON per preset: wall ms, primary rays per second, and distance evaluations per
+//! (and basic+prepass) and prints JSON per preset: wall ms, primary rays per second, and distance evaluations per
 //! pixel of the depth passes (prepass plus primary rays), plus the prepass's reduction.
 
 use clap::Args;
@@ -61,11 +61,12 @@ pub fn run(a: TraceArgs) -> Result<(), String> {
         let scene = presets::load(p.name)?;
         let mut entry = serde_json::Map::new();
         entry.insert("preset".into(), p.name.into());
-        let mut de = [0f64; 3];
+        let mut de = [0f64; 4];
         for (k, (name, method, prepass)) in [
             ("basic", Method::Basic, false),
             ("enhanced", Method::Enhanced, false),
             ("enhanced_prepass", Method::Enhanced, true),
+            ("basic_prepass", Method::Basic, true),
         ]
         .into_iter()
         .enumerate()
@@ -109,6 +110,10 @@ pub fn run(a: TraceArgs) -> Result<(), String> {
         entry.insert(
             "prepass_vs_basic_de_reduction_pct".into(),
             (100.0 * (1.0 - de[2] / de[0])).into(),
+        );
+        entry.insert(
+            "basic_prepass_vs_basic_de_reduction_pct".into(),
+            (100.0 * (1.0 - de[3] / de[0])).into(),
         );
         out.push(serde_json::Value::Object(entry));
     }
