@@ -113,10 +113,17 @@ pub fn first_line(doc: &str) -> &str {
 /// The first sentence of an entry's doc (up to the first `. `), for one-line listings.
 pub fn summary(doc: &str) -> String {
     let p = paragraph(doc);
-    match p.find(". ") {
-        Some(i) => p[..=i].to_string(),
-        None => p,
+    // The first `. ` outside inline code.
+    let mut in_code = false;
+    let bytes = p.as_bytes();
+    for (i, &b) in bytes.iter().enumerate() {
+        match b {
+            b'`' => in_code = !in_code,
+            b'.' if !in_code && bytes.get(i + 1) == Some(&b' ') => return p[..=i].to_string(),
+            _ => {}
+        }
     }
+    p
 }
 
 /// The doc as one paragraph.
@@ -237,6 +244,16 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn summary_stops_at_the_first_sentence_outside_code() {
+        assert_eq!(summary("A b. C d."), "A b.");
+        assert_eq!(
+            summary("Keeps `n . p >= 0` and\nmore. Rest"),
+            "Keeps `n . p >= 0` and more."
+        );
+        assert_eq!(summary("No stop"), "No stop");
     }
 
     #[test]

@@ -94,8 +94,9 @@ crate::declare_family! {
     /// The Koch snowflake as a wire: three Koch curves on an equilateral triangle (circumradius
     /// 2/sqrt 3, in the xy plane), folded onto one curve, which is folded onto its right quarter
     /// each generation (mirror in x, then the 60-degree mirror through (1/3, 0)); `twist` turns
-    /// each generation about its own axis, making a space curve. The estimate is the exact
-    /// distance to the depth-n polyline minus a tube radius of `thickness` finest segments.
+    /// each generation about its own axis, making a space curve. The estimate is the distance to
+    /// the depth-n polyline (exact at twist 0) minus a tube radius of `thickness` finest
+    /// half-segments.
     Koch [Bound] (
         iterations: Int = 5.0, [0.0, 1000.0], "generations of the curve",
         twist: Scalar = 0.0, [-360.0, 360.0], "degrees each generation turns about its axis (0: planar)",

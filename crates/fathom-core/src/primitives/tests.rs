@@ -2,7 +2,7 @@
 //! eikonal property, the Lipschitz bound, and the f32x8 packet path. All iterate over
 //! `Primitive::ALL`, so a new primitive cannot be added untested.
 
-use super::testkit::{Rng, baked, dist, lane, pack, param_sets, v3};
+use super::testkit::{Rng, baked, dist, lane, pack, param_sets, v3, wide_params};
 use super::*;
 use crate::real::F32x8;
 use crate::registry::{Family, Quality};
@@ -239,7 +239,7 @@ fn unsigned_surface(name: &str, user: &[f64], step: f64) -> Option<Vec<[f64; 3]>
 
 /// Half-size of the sampling box and grid resolution of the brute-force reference.
 const BOX: f64 = 2.4;
-const GRID: usize = 97;
+const GRID: usize = 81;
 
 /// Surface samples: zero crossings of `f` along the edges of a grid over [-BOX, BOX]^3, placed
 /// by linear interpolation.
@@ -312,7 +312,9 @@ fn every_primitive_agrees_with_brute_force_surface_distance() {
             // No surface at all: covered by the hand values (1e20 everywhere).
             continue;
         }
-        for user in param_sets(def, &mut rng, 2) {
+        let mut sets = param_sets(def, &mut rng, 2);
+        sets.extend((0..2).map(|_| wide_params(def, &mut rng)));
+        for user in sets {
             let a = baked(def, &user);
             let f = |p: [f64; 3]| eval(k, &a, p);
             let samples =
@@ -385,7 +387,9 @@ fn exact_primitives_are_eikonal_and_project_onto_the_surface() {
         if def.quality != Quality::Exact || def.name == "Empty" {
             continue;
         }
-        for user in param_sets(def, &mut rng, 2) {
+        let mut sets = param_sets(def, &mut rng, 6);
+        sets.extend((0..6).map(|_| wide_params(def, &mut rng)));
+        for user in sets {
             let a = baked(def, &user);
             let f = |p: [f64; 3]| eval(k, &a, p);
             let mut smooth = 0;
@@ -454,7 +458,9 @@ fn every_primitive_packet_path_matches_f64() {
     let mut rng = Rng::new(5);
     for &k in Primitive::ALL {
         let def = k.def();
-        for user in param_sets(def, &mut rng, 2) {
+        let mut sets = param_sets(def, &mut rng, 2);
+        sets.extend((0..4).map(|_| wide_params(def, &mut rng)));
+        for user in sets {
             let a = baked(def, &user);
             for _ in 0..200 {
                 let ps: [[f64; 3]; 8] = std::array::from_fn(|_| rng.cube(2.5));
@@ -470,6 +476,121 @@ fn every_primitive_packet_path_matches_f64() {
                         def.name
                     );
                 }
+            }
+        }
+    }
+}
+
+/// Degenerate parameters (each parameter in turn, and all of them, at 0 or its smallest allowed
+/// value) give finite, 1-Lipschitz fields on both paths: no NaN from a zero radius or
+/// collinear corners.
+#[test]
+fn degenerate_parameters_give_finite_lipschitz_fields() {
+    let mut rng = Rng::new(17);
+    for &k in Primitive::ALL {
+        let def = k.def();
+        let defaults = def.defaults();
+        let lowest: Vec<f64> = def
+            .params
+            .iter()
+            .flat_map(|s| s.default_values().iter().map(move |_| s.min.max(0.0)))
+            .collect();
+        let mut sets = vec![lowest.clone()];
+        for i in 0..defaults.len() {
+            let mut v = defaults.clone();
+            v[i] = lowest[i];
+            sets.push(v);
+        }
+        for user in sets {
+            def.check(&user).unwrap();
+            let a = baked(def, &user);
+            for _ in 0..300 {
+                let p = rng.cube(2.0);
+                let o = rng.dir(0.1);
+                let q = [p[0] + o[0], p[1] + o[1], p[2] + o[2]];
+                let (fp, fq) = (eval(k, &a, p), eval(k, &a, q));
+                assert!(fp.is_finite(), "{} {user:?} at {p:?}: {fp}", def.name);
+                assert!(
+                    (fp - fq).abs() <= 0.1 * (1.0 + 1e-6) + 1e-9,
+                    "{} {user:?}: f({p:?}) = {fp}, f({q:?}) = {fq}",
+                    def.name
+                );
+                let ps: [[f64; 3]; 8] = std::array::from_fn(|_| rng.cube(2.0));
+                let d8 = k.distance::<F32x8>(pack(&ps), &a);
+                for (i, p) in ps.iter().enumerate() {
+                    assert!(
+                        lane(d8, i).is_finite(),
+                        "{} {user:?} f32x8 at {p:?}",
+                        def.name
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Rough cost of each primitive on both paths, as JSON lines (`cargo test -p fathom-core
+/// --release bench_primitives -- --ignored --nocapture`). Measures only; asserts nothing.
+#[test]
+#[ignore]
+fn bench_primitives() {
+    use std::hint::black_box;
+    use std::time::Instant;
+    let mut rng = Rng::new(1);
+    let pts: Vec<[f64; 3]> = (0..4096).map(|_| rng.cube(2.0)).collect();
+    let packets: Vec<_> = pts
+        .chunks_exact(8)
+        .map(|c| pack(&std::array::from_fn(|i| c[i])))
+        .collect();
+    for &k in Primitive::ALL {
+        let def = k.def();
+        let a = baked(def, &def.defaults());
+        let reps = 200;
+        let t = Instant::now();
+        for _ in 0..reps {
+            for p in &pts {
+                black_box(k.distance::<f64>(v3(*black_box(p)), &a));
+            }
+        }
+        let f64_ns = t.elapsed().as_nanos() as f64 / (reps * pts.len()) as f64;
+        let t = Instant::now();
+        for _ in 0..reps {
+            for p in &packets {
+                black_box(k.distance::<F32x8>(*black_box(p), &a));
+            }
+        }
+        let x8_ns = t.elapsed().as_nanos() as f64 / (reps * pts.len()) as f64;
+        println!(
+            "{{\"primitive\": \"{}\", \"f64_ns_per_point\": {f64_ns:.2}, \"f32x8_ns_per_point\": {x8_ns:.2}}}",
+            def.name
+        );
+    }
+}
+
+/// Parameters drawn over a wide box (sizes in [0, 2], signed values in [-2, 2], angles over
+/// their whole range), unrelated to the defaults: every field stays finite and 1-Lipschitz,
+/// including the odd configurations (a carving sphere that misses, one sphere inside another).
+#[test]
+fn wide_random_parameters_give_finite_lipschitz_fields() {
+    let mut rng = Rng::new(23);
+    for &k in Primitive::ALL {
+        let def = k.def();
+        for _ in 0..40 {
+            let user = wide_params(def, &mut rng);
+            let a = baked(def, &user);
+            for i in 0..400 {
+                let p = rng.cube(3.0);
+                let r = rng.range(0.0, if i % 2 == 0 { 0.05 } else { 1.5 });
+                let o = rng.dir(r);
+                let q = [p[0] + o[0], p[1] + o[1], p[2] + o[2]];
+                let (fp, fq) = (eval(k, &a, p), eval(k, &a, q));
+                assert!(fp.is_finite(), "{} {user:?} at {p:?}: {fp}", def.name);
+                assert!(
+                    (fp - fq).abs() <= dist(p, q) * (1.0 + 1e-6) + 1e-9,
+                    "{} {user:?}: f({p:?}) = {fp}, f({q:?}) = {fq}, |p - q| = {}",
+                    def.name,
+                    dist(p, q)
+                );
             }
         }
     }
