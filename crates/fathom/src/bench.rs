@@ -13,10 +13,14 @@ enum BenchKind {
     /// Tape evaluations per second per thread for each preset (f64 scalar, f32 packet), and
     /// tape compile time for a 100-node tree.
     Eval(crate::bench_eval::EvalArgs),
+    /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
+    /// distance evaluations per pixel.
+    Trace(crate::bench_trace::TraceArgs),
 }
 
 pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
+        BenchKind::Trace(t) => crate::bench_trace::run(t),
     }
 }
