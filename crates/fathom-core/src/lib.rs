@@ -12,6 +12,7 @@ pub mod camera;
 pub mod combine;
 pub mod eval;
 pub mod fractals;
+pub mod frame;
 pub mod limits;
 pub mod modifiers;
 pub mod presets;
