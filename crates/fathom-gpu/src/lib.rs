@@ -10,10 +10,11 @@
 
 pub mod device;
 pub mod error;
+mod passes;
 pub mod precision;
 pub mod renderer;
 pub mod shader;
 
 pub use device::Gpu;
 pub use error::GpuError;
-pub use renderer::{GpuValue, Renderer};
+pub use renderer::{GpuValue, Projection, RenderOptions, RenderStats, Renderer};

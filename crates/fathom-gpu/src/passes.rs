@@ -179,7 +179,11 @@ impl Renderer {
             U::STORAGE,
         );
         let gbuf = buf("fathom gbuffer", gbytes, U::STORAGE | U::COPY_SRC);
-        let counters = buf("fathom counters", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST);
+        let counters = buf(
+            "fathom counters",
+            16,
+            U::STORAGE | U::COPY_SRC | U::COPY_DST,
+        );
         let texture = dev.create_texture(&wgpu::TextureDescriptor {
             label: Some("fathom image"),
             size: wgpu::Extent3d {

@@ -8,6 +8,8 @@ use crate::shader;
 use fathom_core::limits;
 use fathom_core::tape::Tape;
 
+pub use crate::passes::{Projection, RenderOptions, RenderStats};
+
 /// Bytes of one material in the GPU table: albedo + specular, shininess + trap colour + 2 pad.
 pub(crate) const MATERIAL_BYTES: u64 = 32;
 
@@ -34,6 +36,8 @@ pub struct Renderer {
     uploaded: Vec<u32>,
     /// Number of materials of the current tape.
     pub(crate) n_materials: u32,
+    /// Render targets of the last image size, reused while the size stays.
+    pub(crate) targets: Option<crate::passes::Targets>,
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -209,6 +213,7 @@ impl Renderer {
             tape_group,
             uploaded: Vec::new(),
             n_materials: 0,
+            targets: None,
         })
     }
 

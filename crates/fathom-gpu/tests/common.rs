@@ -13,8 +13,10 @@ pub fn renderer() -> Renderer {
 }
 
 /// SplitMix64: deterministic and dependency-free.
+#[allow(dead_code)] // not every test binary draws random numbers
 pub struct Rng(pub u64);
 
+#[allow(dead_code)]
 impl Rng {
     pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);

@@ -8,9 +8,11 @@ use std::process::ExitCode;
 
 mod bench;
 mod bench_eval;
+mod bench_gpu;
 mod cmd_list;
 mod cmd_render;
 mod cmd_scene;
+mod render_gpu;
 
 /// Explore infinite 3D worlds built from distance fields: fractals, CSG trees folded into
 /// iterated function systems, rendered by sphere tracing.
@@ -31,7 +33,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene file or preset to an image.
-    Render(cmd_render::RenderArgs),
+    Render(Box<cmd_render::RenderArgs>),
     /// List presets, primitives, operators or fractals with their parameters.
     List(cmd_list::ListArgs),
     /// Print a preset (or a scene file, normalised) as scene-file text.
@@ -44,7 +46,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         None => cmd_render::run_default(),
-        Some(Command::Render(a)) => cmd_render::run(a),
+        Some(Command::Render(a)) => cmd_render::run(*a),
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
         Some(Command::Bench(a)) => bench::run(a),
