@@ -41,14 +41,17 @@ fn dispatch_cases_follow_the_registry_tables() {
 
 #[test]
 fn parameter_layout_follows_the_declaration() {
-    // Torus: two scalars; Box: one Vec3; Mandelbulb: Scalar, Int, Scalar; Rotate: baked.
+    // Torus: two scalars; Box: one Vec3; Mandelbulb: Scalar, Int, Scalar, Scalar; Rotate:
+    // baked.
     let d = dispatch();
     assert!(
         d.contains("prim_Torus(p, params[a + 0u], params[a + 1u])"),
         "{d}"
     );
     assert!(d.contains("prim_Box(p, param_vec3(a + 0u))"));
-    assert!(d.contains("frac_Mandelbulb(p, params[a + 0u], u32(params[a + 1u]), params[a + 2u])"));
+    assert!(d.contains(
+        "frac_Mandelbulb(p, params[a + 0u], u32(params[a + 1u]), params[a + 2u], params[a + 3u])"
+    ));
     assert!(d.contains("xf_Rotate(p, k, a)"));
 }
 
