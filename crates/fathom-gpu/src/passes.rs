@@ -365,7 +365,8 @@ impl Renderer {
         }
         let gpu_start = Instant::now();
         q.submit([enc.finish()]);
-        self.gpu.wait(300)?;
+        // Generous: a software adapter compiles the pipelines on their first dispatch.
+        self.gpu.wait(900)?;
         let ms_gpu = gpu_start.elapsed().as_secs_f64() * 1e3;
         let gbytes = self.gpu.read_buffer(&t.gbuf, t.gbuf.size())?;
         let cbytes = self.gpu.read_buffer(&t.counters, 16)?;

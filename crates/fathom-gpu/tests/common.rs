@@ -2,10 +2,21 @@
 //! small deterministic random generator.
 
 use fathom_gpu::{Gpu, Renderer};
+use std::sync::{LazyLock, Mutex, MutexGuard};
 
-/// The renderer on Vulkan (lavapipe on a machine without a GPU). Panics, never skips, when no
-/// adapter is found: CI must fail rather than pass without testing the GPU path.
-pub fn renderer() -> Renderer {
+static SHARED: LazyLock<Mutex<Renderer>> = LazyLock::new(|| Mutex::new(fresh_renderer()));
+
+/// One renderer shared by the tests of a binary: lavapipe compiles each pipeline on its first
+/// dispatch, which takes a minute or more on a loaded 2-core machine, so tests share it.
+#[allow(dead_code)]
+pub fn renderer() -> MutexGuard<'static, Renderer> {
+    SHARED.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// A renderer of its own on Vulkan (lavapipe on a machine without a GPU). Panics, never skips,
+/// when no adapter is found: CI must fail rather than pass without testing the GPU path.
+#[allow(dead_code)]
+pub fn fresh_renderer() -> Renderer {
     let gpu = Gpu::headless_vulkan().unwrap_or_else(|e| {
         panic!("GPU tests need a Vulkan adapter: {e}\n(run scripts/setup.sh to install Mesa's lavapipe)")
     });

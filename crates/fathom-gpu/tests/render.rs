@@ -4,6 +4,7 @@
 mod common;
 
 use common::renderer;
+
 use fathom_core::frame::Frame;
 use fathom_core::presets::{self, PRESETS};
 use fathom_core::primitives::Primitive;
@@ -140,7 +141,8 @@ fn scene_edits_build_no_shader_or_pipeline() {
 
 #[test]
 fn bad_sizes_give_errors_not_panics() {
-    let mut r = renderer();
+    // Its own renderer: the simulated loss must not reach the other tests.
+    let mut r = common::fresh_renderer();
     let scene = sphere_scene();
     let e = r.render_scene(&scene, &mono(0, 10)).unwrap_err();
     assert!(e.to_string().contains("empty"), "{e}");

@@ -261,14 +261,16 @@ fn sky(dir: vec3f) -> vec3f {
     return mix(g.sky_bottom.xyz, g.sky_top.xyz, u);
 }
 
-// Evaluator::normal: tetrahedron technique.
-fn normal_at(p: vec3f, h: f32) -> vec3f {
-    let k0 = vec3f(1.0, -1.0, -1.0);
-    let k1 = vec3f(-1.0, -1.0, 1.0);
-    let k2 = vec3f(-1.0, 1.0, -1.0);
-    let k3 = vec3f(1.0, 1.0, 1.0);
-    let n = k0 * eval_distance(p + k0 * h) + k1 * eval_distance(p + k1 * h) + k2 * eval_distance(p + k2 * h) + k3 * eval_distance(p + k3 * h);
-    return n / max(length(n), 1e-30);
+// The tetrahedron offsets of Evaluator::normal, in its order.
+fn tetra(j: u32) -> vec3f {
+    if j == 0u {
+        return vec3f(1.0, -1.0, -1.0);
+    } else if j == 1u {
+        return vec3f(-1.0, -1.0, 1.0);
+    } else if j == 2u {
+        return vec3f(-1.0, 1.0, -1.0);
+    }
+    return vec3f(1.0, 1.0, 1.0);
 }
 
 // shade::soft_shadow: Aaltonen's improved penumbra estimate. Returns (factor, evaluations).
@@ -331,10 +333,35 @@ fn shade(@builtin(global_invocation_id) gid: vec3u) {
     var evals = 0u;
     if gbuf[i].misc.z == 1u {
         let p = at(ray, t);
-        let v = eval_tape(p);
         let h = max(t * g.eye_hi.w, 1e-12);
-        n = normal_at(p, h * 0.5);
-        evals = 5u;
+        let ao_range = g.pal_a.w;
+        // One call site for the hit's value, the normal's four probes (Evaluator::normal,
+        // offset h / 2) and the AO samples: every call of the interpreter is inlined by the
+        // driver, so fewer sites compile much faster.
+        var v: Val;
+        var occ = 0.0;
+        var aw = 1.0;
+        for (var j = 0u; j < 5u + AO_SAMPLES; j++) {
+            var q = p;
+            var hh = 0.0;
+            if j < 4u {
+                q = p + tetra(j) * (h * 0.5);
+            } else if j > 4u {
+                hh = ao_range * (0.1 + 0.9 * f32(j - 5u) / f32(AO_SAMPLES - 1u));
+                q = p + n * hh;
+            }
+            let r = eval_tape(q);
+            if j < 4u {
+                n += tetra(j) * r.d;
+            } else if j == 4u {
+                v = r;
+                n = n / max(length(n), 1e-30);
+            } else {
+                occ += max(hh - r.d, 0.0) * aw;
+                aw *= 0.7;
+            }
+        }
+        evals = 5u + AO_SAMPLES;
         let nm = g.dims2.y;
         let i1 = min(u32(max(v.id, 0.0)), nm - 1u);
         let i2 = min(u32(max(v.id2, 0.0)), nm - 1u);
@@ -345,17 +372,6 @@ fn shade(@builtin(global_invocation_id) gid: vec3u) {
         let trap = min(v.trap, 4.0);
         let pc = clamp(g.pal_a.xyz + g.pal_b.xyz * cos(2.0 * PI * (g.pal_c.xyz * trap + g.pal_d.xyz)), vec3f(0.0), vec3f(1.0));
         let albedo = mix(m0.xyz, pc, m1.y);
-
-        let ao_range = g.pal_a.w;
-        var occ = 0.0;
-        var aw = 1.0;
-        for (var s = 0u; s < AO_SAMPLES; s++) {
-            let hh = ao_range * (0.1 + 0.9 * f32(s) / f32(AO_SAMPLES - 1u));
-            let d = eval_distance(p + n * hh);
-            occ += max(hh - d, 0.0) * aw;
-            aw *= 0.7;
-        }
-        evals += AO_SAMPLES;
         let ao = clamp(1.0 - (g.sky_bottom.w * 2.0 / ao_range) * occ, 0.0, 1.0);
         let hemi = 0.7 + 0.3 * n.y;
         col = albedo * (g.sky_top.w * ao) * hemi;
