@@ -16,3 +16,6 @@ pub mod tracer;
 
 pub use render::{Options, Stats, render};
 pub use tracer::Method;
+
+#[cfg(test)]
+mod tests;

@@ -85,8 +85,8 @@ pub fn downsample(big: &Frame, ss: u32) -> Frame {
             for sy in 0..ss {
                 for sx in 0..ss {
                     let i = big.index(x * ss + sx, y * ss + sy);
-                    for k in 0..3 {
-                        c[k] += big.colour[i][k];
+                    for (acc, v) in c.iter_mut().zip(big.colour[i]) {
+                        *acc += v;
                     }
                     steps += big.steps[i] as u64;
                     if best.is_none_or(|b| big.depth[i] < big.depth[b]) {

@@ -12,6 +12,9 @@ use fathom_core::{Evaluator, Material, Tape, V3};
 
 /// Most steps of a shadow ray.
 pub const SHADOW_STEPS: u32 = 96;
+/// Shadow rays leave the surface this many pixel footprints along the normal (fractal distance
+/// estimates undershoot close to the surface; a smaller lift self-shadows).
+pub const SHADOW_LIFT: f64 = 4.0;
 /// Distance samples of the ambient-occlusion estimate.
 pub const AO_SAMPLES: u32 = 5;
 
@@ -121,18 +124,21 @@ pub fn shade<S: Real>(
         S::lerp(lanes(&alb[c]), pc, tw)
     });
 
-    // Distance-field ambient occlusion (Quilez): compare the probe distance along the normal
-    // with the field there.
+    // Distance-field ambient occlusion (after Quilez), as the weighted shortfall of the field
+    // along the normal relative to the probe distance. The ratio keeps fractal estimates, which
+    // undershoot the true distance, from blackening everything.
     let mut occ = zero;
     let mut w = one;
+    let mut wsum = 0.0;
     for i in 0..AO_SAMPLES {
         let hh = S::splat(sh.ao_range * (0.1 + 0.9 * i as f64 / (AO_SAMPLES - 1) as f64));
         let d = ev.distance(tape, p + n * hh);
-        occ += (hh - d).max(zero) * w;
+        occ += (one - d / hh).clamp(zero, one) * w;
+        wsum += 0.7f64.powi(i as i32);
         w *= S::splat(0.7);
     }
     evals += AO_SAMPLES as u64 * S::LANES as u64;
-    let ao = (one - S::splat(r.ao * 2.0 / sh.ao_range) * occ).clamp(zero, one);
+    let ao = (one - S::splat(r.ao / wsum) * occ).clamp(zero, one);
 
     let ambient = S::splat(r.ambient) * ao;
     // Hemisphere ambient: brighter for normals facing the sky.
@@ -205,10 +211,15 @@ fn soft_shadow<S: Real>(
         let h = ev.distance(tape, ro + l * t);
         evals += S::LANES as u64;
         let hp = h.max(zero);
-        let y = hp * hp / (S::splat(2.0) * ph);
-        let d = (hp * hp - y * y).max(zero).sqrt();
+        // Where this and the previous unbounding sphere intersect; when this sphere is more than
+        // twice the previous one they do not constrain each other and the classic estimate
+        // (y = 0, d = h) applies.
+        let y0 = hp * hp / (S::splat(2.0) * ph);
+        let far = y0.ge(hp);
+        let y = S::select(far, zero, y0);
+        let d = S::select(far, hp, (hp * hp - y * y).max(zero).sqrt());
         let est = k * d / (t - y).max(S::splat(1e-12));
-        let blocked = h.lt(eps);
+        let blocked = h.lt(eps * S::splat(0.25));
         res = S::select(active, S::select(blocked, zero, res.min(est)), res);
         ph = S::select(active, hp.max(S::splat(1e-12)), ph);
         t = S::select(active, t + hp.max(eps), t);

@@ -8,7 +8,8 @@
 //! - **enhanced** (Keinert et al. 2014, "Enhanced Sphere Tracing"): over-relax, stepping
 //!   `omega * d`; if the unbounding sphere at the new point does not overlap the previous one
 //!   (`|d| + d_prev < step`), the step may have skipped a surface, so the lane goes back to the
-//!   safe point `t_prev + d_prev` and continues with `omega = 1`.
+//!   safe point `t_prev + d_prev` and continues with `omega = 1`. Landing inside the surface
+//!   (`d < 0`) after an over-relaxed step counts as a failure too.
 //!
 //! The same loop marches cones for the prepass: with a cone slope `c`, a lane steps by
 //! `d - c t`, which keeps every ray inside the cone outside the surface (triangle inequality).
@@ -29,7 +30,9 @@ pub enum Method {
 }
 
 /// Over-relaxation factor of the enhanced tracer (Keinert et al. suggest 1.2 to 1.6 for
-/// distance bounds).
+/// distance bounds). Measured on the Mandelbulb at 640x480 (depth evaluations per pixel; basic
+/// 25.2): without the prepass 1.2 gives 20.9 and 1.5 gives 26.1; with the prepass (basic 11.6)
+/// 1.2 gives 10.2 and 1.5 gives 9.6. Rendering uses the prepass by default, hence 1.5.
 pub const OMEGA: f64 = 1.5;
 
 /// How one march behaves.
@@ -91,8 +94,9 @@ pub fn march<S: Real>(
         }
         let d = ev.distance(tape, origin + dir * t);
         steps += S::select(active, one, zero);
-        // Keinert's overlap test: only meaningful after an over-relaxed step.
-        let fail = omega.gt(one) & (d.abs() + prev_d).lt(prev_step);
+        // Keinert's overlap test, only meaningful after an over-relaxed step; landing inside
+        // (d < 0) after such a step also means it overshot.
+        let fail = omega.gt(one) & ((d.abs() + prev_d).lt(prev_step) | d.lt(zero));
         let free = d - cone * t;
         let new_hit = active & !fail & free.lt(eps_slope * t + eps_min);
         hit = hit | new_hit;
@@ -177,9 +181,11 @@ mod tests {
                 if want_hit {
                     let t = -b - disc.sqrt();
                     let got = m.t.lane(i);
+                    // Stopped in front of the surface, within the hit epsilon of it.
+                    let r = (o + dv * got).length() - 1.0;
                     assert!(
-                        got <= t + 1e-5 && t - got <= 1e-4 * t + 1e-5,
-                        "lane {i} omega {omega}: t {got} want {t}"
+                        got <= t + 1e-5 && r >= -1e-5 && r <= 1e-4 * got + 1e-5,
+                        "lane {i} omega {omega}: t {got} want {t}, {r} off the surface"
                     );
                 }
             }
@@ -196,8 +202,9 @@ mod tests {
         assert!(!m.hit && m.t == 0.0 && m.steps == 0.0);
         let mut cone = params(1.0);
         cone.cone_slope = 0.1;
-        let c = march(&mut ev, &tape, o, d, 0.0, true, &cone);
-        let r = march(&mut ev, &tape, o, d, 0.0, true, &params(1.0));
-        assert!(c.t < r.t && c.t > 1.0, "cone {} ray {}", c.t, r.t);
+        // From t = 1 the ray sees the sphere 1 away; the cone (radius 0.1 there) only 0.9.
+        let c = march(&mut ev, &tape, o, d, 1.0, true, &cone);
+        let r = march(&mut ev, &tape, o, d, 1.0, true, &params(1.0));
+        assert!(c.t < r.t - 0.05 && c.t > 1.5, "cone {} ray {}", c.t, r.t);
     }
 }

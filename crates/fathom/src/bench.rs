@@ -15,11 +15,15 @@ enum BenchKind {
     Eval(crate::bench_eval::EvalArgs),
     /// GPU renderer vs CPU tracer per preset: ms per frame and evaluations per pixel.
     Gpu(crate::bench_gpu::GpuArgs),
+    /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
+    /// distance evaluations per pixel.
+    Trace(crate::bench_trace::TraceArgs),
 }
 
 pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
         BenchKind::Gpu(g) => crate::bench_gpu::run(g),
+        BenchKind::Trace(t) => crate::bench_trace::run(t),
     }
 }

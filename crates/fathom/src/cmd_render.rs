@@ -311,4 +311,61 @@ mod tests {
         assert!(parse_vec("1,2").is_err());
         assert!(parse_vec("1,2,nan").is_err());
     }
+
+    fn args(output: &str, size: (u32, u32)) -> RenderArgs {
+        RenderArgs {
+            scene: None,
+            preset: None,
+            output: PathBuf::from(output),
+            size,
+            eye: None,
+            target: None,
+            up: None,
+            fov: None,
+            threads: Some(1),
+            tracer: TracerKind::Enhanced,
+            no_prepass: false,
+            supersample: 1,
+            ssao: 0.0,
+            mask: None,
+            depth: None,
+            steps: None,
+            stats: None,
+            quiet: true,
+        }
+    }
+
+    #[test]
+    fn bad_paths_sizes_and_cameras_fail_before_rendering() {
+        let t = Instant::now();
+        // A 16384x4096 frame would take minutes: these must fail at once.
+        let e = run(args("/nonexistent-dir/x.png", (16384, 4096))).unwrap_err();
+        assert!(e.contains("cannot write"), "{e}");
+        let e = run(args("x.png", (20000, 10))).unwrap_err();
+        assert!(e.contains("limit"), "{e}");
+        let mut a = args("/nonexistent-dir/x.png", (16, 16));
+        a.fov = Some(200.0);
+        assert!(run(a).unwrap_err().contains("fov"));
+        assert!(t.elapsed().as_secs_f64() < 5.0);
+    }
+
+    #[test]
+    fn renders_a_preset_with_every_side_output() {
+        let dir = std::env::temp_dir().join(format!("fathom-render-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = |n: &str| dir.join(n);
+        let mut a = args(p("c.png").to_str().unwrap(), (24, 16));
+        a.mask = Some(p("m.png"));
+        a.depth = Some(p("d.exr"));
+        a.steps = Some(p("s.png"));
+        a.stats = Some(p("s.json"));
+        run(a).unwrap();
+        for n in ["c.png", "m.png", "d.exr", "s.png", "s.json"] {
+            assert!(std::fs::metadata(p(n)).unwrap().len() > 0, "{n}");
+        }
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(p("s.json")).unwrap()).unwrap();
+        assert_eq!(stats["primary_rays"], 24 * 16);
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

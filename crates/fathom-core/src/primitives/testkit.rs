@@ -93,3 +93,24 @@ pub fn pack(ps: &[[f64; 3]; 8]) -> V3<F32x8> {
 pub fn lane(v: F32x8, i: usize) -> f64 {
     <F32x8 as Real>::lane(v, i)
 }
+
+/// Parameters drawn over a wide box: sizes in [0, 2], signed values in [-2, 2], angles over
+/// their whole declared range.
+pub fn wide_params(def: &Def, rng: &mut Rng) -> Vec<f64> {
+    let user: Vec<f64> = def
+        .params
+        .iter()
+        .flat_map(|s| {
+            let (lo, hi) = if s.max <= 180.0 && s.max > 2.0 {
+                (s.min, s.max)
+            } else {
+                (s.min.max(-2.0), s.max.min(2.0))
+            };
+            (0..s.kind.width())
+                .map(|_| rng.range(lo, hi))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    def.check(&user).unwrap();
+    user
+}

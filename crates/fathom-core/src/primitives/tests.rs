@@ -2,7 +2,7 @@
 //! eikonal property, the Lipschitz bound, and the f32x8 packet path. All iterate over
 //! `Primitive::ALL`, so a new primitive cannot be added untested.
 
-use super::testkit::{Rng, baked, dist, lane, pack, param_sets, v3};
+use super::testkit::{Rng, baked, dist, lane, pack, param_sets, v3, wide_params};
 use super::*;
 use crate::real::F32x8;
 use crate::registry::{Family, Quality};
@@ -594,25 +594,4 @@ fn wide_random_parameters_give_finite_lipschitz_fields() {
             }
         }
     }
-}
-
-/// Parameters drawn over a wide box: sizes in [0, 2], signed values in [-2, 2], angles over
-/// their whole declared range.
-fn wide_params(def: &crate::registry::Def, rng: &mut Rng) -> Vec<f64> {
-    let user: Vec<f64> = def
-        .params
-        .iter()
-        .flat_map(|s| {
-            let (lo, hi) = if s.max <= 180.0 && s.max > 2.0 {
-                (s.min, s.max)
-            } else {
-                (s.min.max(-2.0), s.max.min(2.0))
-            };
-            (0..s.kind.width())
-                .map(|_| rng.range(lo, hi))
-                .collect::<Vec<_>>()
-        })
-        .collect();
-    def.check(&user).unwrap();
-    user
 }

@@ -129,7 +129,7 @@ fn march(r: Ray, t0: f32, t_max: f32, max_steps: u32, eps_slope: f32, cone: f32,
         }
         let d = eval_distance(at(r, t));
         steps += 1u;
-        let fail = omega > 1.0 && (abs(d) + prev_d) < prev_step;
+        let fail = omega > 1.0 && ((abs(d) + prev_d) < prev_step || d < 0.0);
         let free = d - cone * t - cone0;
         if !fail && free < eps_slope * t {
             hit = true;
@@ -284,10 +284,12 @@ fn soft_shadow(ro: vec3f, l: vec3f, eps: f32, k: f32) -> vec2f {
         let h = eval_distance(ro + l * t);
         evals += 1.0;
         let hp = max(h, 0.0);
-        let y = hp * hp / (2.0 * ph);
-        let d = sqrt(max(hp * hp - y * y, 0.0));
+        let y0 = hp * hp / (2.0 * ph);
+        let far = y0 >= hp;
+        let y = select(y0, 0.0, far);
+        let d = select(sqrt(max(hp * hp - y * y, 0.0)), hp, far);
         let est = k * d / max(t - y, 1e-12);
-        let blocked = h < eps;
+        let blocked = h < eps * 0.25;
         res = select(min(res, est), 0.0, blocked);
         ph = max(hp, 1e-12);
         t = t + max(hp, eps);
@@ -357,7 +359,7 @@ fn shade(@builtin(global_invocation_id) gid: vec3u) {
                 v = r;
                 n = n / max(length(n), 1e-30);
             } else {
-                occ += max(hh - r.d, 0.0) * aw;
+                occ += clamp(1.0 - r.d / hh, 0.0, 1.0) * aw;
                 aw *= 0.7;
             }
         }
@@ -372,7 +374,8 @@ fn shade(@builtin(global_invocation_id) gid: vec3u) {
         let trap = min(v.trap, 4.0);
         let pc = clamp(g.pal_a.xyz + g.pal_b.xyz * cos(2.0 * PI * (g.pal_c.xyz * trap + g.pal_d.xyz)), vec3f(0.0), vec3f(1.0));
         let albedo = mix(m0.xyz, pc, m1.y);
-        let ao = clamp(1.0 - (g.sky_bottom.w * 2.0 / ao_range) * occ, 0.0, 1.0);
+        // The AO weights 0.7^i summed over the five samples.
+        let ao = clamp(1.0 - (g.sky_bottom.w / 2.7731) * occ, 0.0, 1.0);
         let hemi = 0.7 + 0.3 * n.y;
         col = albedo * (g.sky_top.w * ao) * hemi;
         for (var li = 0u; li < g.dims2.x; li++) {
