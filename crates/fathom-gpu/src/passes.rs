@@ -268,7 +268,16 @@ impl Renderer {
         }
         scene.validate().map_err(GpuError::Invalid)?;
         self.gpu.check_lost()?;
-        let cam = scene.camera.frame();
+        let mut cam = scene.camera.frame();
+        if let Projection::Ods { .. } = o.projection {
+            // A panorama is levelled: latitude 0 is the plane normal to the camera's up
+            // vector, longitude 0 the view direction projected onto it.
+            let up = scene.camera.up.normalize();
+            let f = (cam.forward - up * cam.forward.dot(up)).normalize();
+            cam.right = f.cross(up);
+            cam.up = up;
+            cam.forward = f;
+        }
         let pixel_angle = match o.projection {
             Projection::Ods { .. } => {
                 (std::f64::consts::PI / o.height as f64).max(std::f64::consts::TAU / o.width as f64)

@@ -193,6 +193,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     if a.threads == Some(0) || a.threads.is_some_and(|t| t > 1024) {
         return Err("--threads must be in [1, 1024]".into());
     }
+    crate::render_gpu::check(a.gpu, a.stereo, a.eye_separation)?;
     let scene = load_scene(&a)?;
     // Open every output before rendering, so a bad path fails fast.
     let out = output::open_output(&a.output)?;

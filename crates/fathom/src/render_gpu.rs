@@ -33,6 +33,23 @@ pub struct Rendered {
     pub ms_total: f64,
 }
 
+/// Checks the GPU and stereo options before any output file is opened.
+pub fn check(gpu: bool, stereo: Option<StereoKind>, eye_separation: f64) -> Result<(), String> {
+    if !(eye_separation.is_finite() && (0.0..=1e6).contains(&eye_separation)) {
+        return Err(format!(
+            "--eye-separation = {eye_separation} is out of range [0, 1e6] (scene units)"
+        ));
+    }
+    if stereo == Some(StereoKind::Ods) && !gpu {
+        return Err(
+            "--stereo ods renders on the GPU only for now; add --gpu (a machine without a \
+             GPU can run it through Mesa's lavapipe: scripts/setup.sh installs it)"
+                .into(),
+        );
+    }
+    Ok(())
+}
+
 /// Renders `scene` on the GPU or (for stereo without `--gpu`) on the CPU.
 pub fn render(
     scene: &Scene,
@@ -41,11 +58,7 @@ pub fn render(
     stereo: Option<StereoKind>,
     eye_separation: f64,
 ) -> Result<Rendered, String> {
-    if !(eye_separation.is_finite() && (0.0..=1e6).contains(&eye_separation)) {
-        return Err(format!(
-            "--eye-separation = {eye_separation} is out of range [0, 1e6] (scene units)"
-        ));
-    }
+    check(gpu, stereo, eye_separation)?;
     let projection = match stereo {
         None => Projection::Mono,
         Some(StereoKind::Sbs) => Projection::SideBySide { eye_separation },
@@ -54,11 +67,7 @@ pub fn render(
     if !gpu {
         return match stereo {
             Some(StereoKind::Sbs) => cpu_side_by_side(scene, cpu, eye_separation),
-            Some(StereoKind::Ods) => Err(
-                "--stereo ods renders on the GPU only for now; add --gpu (a machine without a \
-                 GPU can run it through Mesa's lavapipe: scripts/setup.sh installs it)"
-                    .into(),
-            ),
+            Some(StereoKind::Ods) => Err("internal: ODS without --gpu passed the check".into()),
             None => Err("internal: the GPU path was asked for a CPU mono render".into()),
         };
     }
