@@ -333,6 +333,9 @@ mod tests {
             steps: None,
             stats: None,
             quiet: true,
+            gpu: false,
+            stereo: None,
+            eye_separation: 0.065,
         }
     }
 
