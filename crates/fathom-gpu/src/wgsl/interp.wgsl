@@ -6,16 +6,20 @@ const MAX_STACK: u32 = 34u;
 // tape cannot hang the device.
 const MAX_EXECUTED: u32 = 16384u + 256u * 66u;
 
+// The stacks live in private memory: zero-initialised once per invocation rather than on every
+// call of `eval_tape` (a function-local array would be cleared each time). A valid tape always
+// pushes before it reads, so stale entries from an earlier call are never seen.
+var<private> pts: array<Pt, MAX_STACK>;
+var<private> vals: array<Val, MAX_STACK>;
+var<private> loop_rem: array<u32, 4>;
+var<private> loop_body: array<u32, 4>;
+
 fn eval_tape(pw: vec3f) -> Val {
     var p = pw;
     var k = 1.0;
     var trap = NO_TRAP;
-    var pts: array<Pt, MAX_STACK>;
     var np = 0u;
-    var vals: array<Val, MAX_STACK>;
     var nv = 0u;
-    var loop_rem: array<u32, 4>;
-    var loop_body: array<u32, 4>;
     var nl = 0u;
     var pc = 0u;
     let len = arrayLength(&instrs);
