@@ -19,6 +19,9 @@ fn eval_tape(pw: vec3f) -> Val {
     var k = 1.0;
     var trap = NO_TRAP;
     var np = 0u;
+    // The top of the value stack stays in registers (`top`); `vals[0 .. nv - 1]` hold the
+    // values below it, so a tape of one shape never touches the array.
+    var top = val_solid(1e20, 0.0, NO_TRAP);
     var nv = 0u;
     var nl = 0u;
     var pc = 0u;
@@ -64,24 +67,28 @@ fn eval_tape(pw: vec3f) -> Val {
             }
         } else if fam == 1u {
             let d = op_prim(i, a, p);
-            vals[nv] = val_solid(d * k, f32(ins.z), trap);
+            if nv > 0u {
+                vals[nv - 1u] = top;
+            }
+            top = val_solid(d * k, f32(ins.z), trap);
             nv += 1u;
         } else if fam == 2u {
             let e = op_frac(i, a, p);
-            vals[nv] = val_solid(e.x * k, f32(ins.z), min(e.y, trap));
+            if nv > 0u {
+                vals[nv - 1u] = top;
+            }
+            top = val_solid(e.x * k, f32(ins.z), min(e.y, trap));
             nv += 1u;
         } else if fam == 3u {
             op_xf(i, a, &p, &k);
         } else if fam == 4u {
-            vals[nv - 1u].d = op_mod(i, a, vals[nv - 1u].d, k);
+            top.d = op_mod(i, a, top.d, k);
         } else if fam == 5u {
-            let vb = vals[nv - 1u];
-            let va = vals[nv - 2u];
-            vals[nv - 2u] = op_comb(i, a, va, vb);
+            top = op_comb(i, a, vals[nv - 2u], top);
             nv -= 1u;
         }
     }
-    return vals[0];
+    return top;
 }
 
 fn eval_distance(p: vec3f) -> f32 {
