@@ -4,7 +4,13 @@
 set -euo pipefail
 
 need=()
-# (GPU and window tests add their packages here: mesa-vulkan-drivers libvulkan1 xvfb ...)
+have() { dpkg -s "$1" >/dev/null 2>&1; }
+# GPU tests (crates/fathom-gpu): wgpu through Vulkan; on a machine without a GPU, Mesa's
+# lavapipe driver runs the same shaders on the CPU. The tests fail (never skip) without it.
+for p in mesa-vulkan-drivers libvulkan1; do
+  have "$p" || need+=("$p")
+done
+# (window tests add their packages here: xvfb ...)
 
 if [ ${#need[@]} -gt 0 ]; then
   echo "setup: installing ${need[*]}"

@@ -13,6 +13,8 @@ enum BenchKind {
     /// Tape evaluations per second per thread for each preset (f64 scalar, f32 packet), and
     /// tape compile time for a 100-node tree.
     Eval(crate::bench_eval::EvalArgs),
+    /// GPU renderer vs CPU tracer per preset: ms per frame and evaluations per pixel.
+    Gpu(crate::bench_gpu::GpuArgs),
     /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
     /// distance evaluations per pixel.
     Trace(crate::bench_trace::TraceArgs),
@@ -21,6 +23,7 @@ enum BenchKind {
 pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
+        BenchKind::Gpu(g) => crate::bench_gpu::run(g),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
     }
 }

@@ -25,6 +25,8 @@ pub enum TracerKind {
 ///   fathom render my.ron -o my.png --size 1920x1080 --supersample 2
 ///   fathom render --preset mandelbulb --eye 0,0,2 --fov 30 -o close.png
 ///   fathom render --preset mandelbulb -o b.png --steps steps.png --stats stats.json
+///   fathom render --preset mandelbulb --gpu -o gpu.png
+///   fathom render --preset mandelbulb --gpu --stereo ods --size 2048x1024 -o vr.png
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct RenderArgs {
@@ -81,6 +83,16 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Render on the GPU (wgpu). Without any adapter it says so and suggests the CPU path.
+    #[arg(long)]
+    pub gpu: bool,
+    /// Stereo: `sbs` (side by side, twice as wide) or `ods` (360-degree equirectangular, left
+    /// eye on top, twice as tall; use a 2:1 --size; needs --gpu).
+    #[arg(long, value_enum)]
+    pub stereo: Option<crate::render_gpu::StereoKind>,
+    /// Distance between the eyes for --stereo, in scene units.
+    #[arg(long, default_value_t = 0.065)]
+    pub eye_separation: f64,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -181,6 +193,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     if a.threads == Some(0) || a.threads.is_some_and(|t| t > 1024) {
         return Err("--threads must be in [1, 1024]".into());
     }
+    crate::render_gpu::check(a.gpu, a.stereo, a.eye_separation)?;
     let scene = load_scene(&a)?;
     // Open every output before rendering, so a bad path fails fast.
     let out = output::open_output(&a.output)?;
@@ -210,7 +223,15 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     };
-    let (frame, stats) = pool.install(|| fathom_trace::render(&scene, &opts, &progress))?;
+    let (frame, stats, ms_total) = if a.gpu || a.stereo.is_some() {
+        let r = pool.install(|| {
+            crate::render_gpu::render(&scene, &opts, a.gpu, a.stereo, a.eye_separation)
+        })?;
+        (r.frame, r.stats, r.ms_total)
+    } else {
+        let (frame, stats) = pool.install(|| fathom_trace::render(&scene, &opts, &progress))?;
+        (frame, stats_json(&stats), stats.ms_total)
+    };
     bar.finish_and_clear();
 
     output::save_colour(&frame, out, &a.output)?;
@@ -224,7 +245,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         output::save_steps(&frame, f, p)?;
     }
     if let Some((f, p)) = stats_file {
-        serde_json::to_writer_pretty(std::io::BufWriter::new(f), &stats_json(&stats))
+        serde_json::to_writer_pretty(std::io::BufWriter::new(f), &stats)
             .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
     }
     if !a.quiet {
@@ -234,7 +255,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
             shown.display(),
             width,
             height,
-            stats.ms_total
+            ms_total
         );
     }
     Ok(())
@@ -263,6 +284,9 @@ pub fn run_default() -> Result<(), String> {
         steps: None,
         stats: None,
         quiet: true,
+        gpu: false,
+        stereo: None,
+        eye_separation: 0.065,
     };
     run(a)?;
     let shown = std::fs::canonicalize("fathom.png").unwrap_or("fathom.png".into());
@@ -309,6 +333,9 @@ mod tests {
             steps: None,
             stats: None,
             quiet: true,
+            gpu: false,
+            stereo: None,
+            eye_separation: 0.065,
         }
     }
 

@@ -8,10 +8,12 @@ use std::process::ExitCode;
 
 mod bench;
 mod bench_eval;
+mod bench_gpu;
 mod bench_trace;
 mod cmd_list;
 mod cmd_render;
 mod cmd_scene;
+mod render_gpu;
 
 /// Explore infinite 3D worlds built from distance fields: fractals, CSG trees folded into
 /// iterated function systems, rendered by sphere tracing.

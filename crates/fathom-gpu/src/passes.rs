@@ -1,0 +1,413 @@
+//! One frame on the GPU: the multi-resolution cone-marching prepass (blocks of 8, 4 and 2
+//! pixels), the depth pass (enhanced sphere tracing), and the colour pass, then the readback of
+//! the G-buffer into a [`Frame`]. The passes mirror fathom-trace's, constant for constant, so
+//! the two renderers agree pixel for pixel up to f32 rounding.
+//!
+//! Projections: a pinhole camera, side-by-side stereo (two parallel pinhole cameras `eye
+//! separation` apart, left eye on the left), and omni-directional stereo (ODS) as an
+//! equirectangular top/bottom pair (left eye on top), the format VR video players read.
+
+use crate::error::GpuError;
+use crate::precision;
+use crate::renderer::Renderer;
+use fathom_core::frame::{Frame, NO_ID};
+use fathom_core::{Evaluator, Scene, Tape, V3};
+use std::time::Instant;
+
+/// How the rays leave the camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// One pinhole view.
+    Mono,
+    /// Two parallel pinhole views side by side (output twice as wide), eyes `eye_separation`
+    /// apart along the camera's right axis.
+    SideBySide { eye_separation: f64 },
+    /// Omni-directional stereo, equirectangular, left eye on top (output twice as tall); each
+    /// eye's view is `width` x `height` and should be 2:1.
+    Ods { eye_separation: f64 },
+}
+
+impl Projection {
+    fn mode(self) -> u32 {
+        match self {
+            Projection::Mono => 0,
+            Projection::SideBySide { .. } => 1,
+            Projection::Ods { .. } => 2,
+        }
+    }
+    fn separation(self) -> f64 {
+        match self {
+            Projection::Mono => 0.0,
+            Projection::SideBySide { eye_separation } | Projection::Ods { eye_separation } => {
+                eye_separation
+            }
+        }
+    }
+    fn eyes(self) -> u32 {
+        if self == Projection::Mono { 1 } else { 2 }
+    }
+    /// Output size for per-eye size `w` x `h`.
+    pub fn output_size(self, w: u32, h: u32) -> (u32, u32) {
+        match self {
+            Projection::Mono => (w, h),
+            Projection::SideBySide { .. } => (2 * w, h),
+            Projection::Ods { .. } => (w, 2 * h),
+        }
+    }
+}
+
+/// What to render.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderOptions {
+    /// Size of one eye's view in pixels.
+    pub width: u32,
+    pub height: u32,
+    pub projection: Projection,
+    /// Run the cone-marching prepass.
+    pub prepass: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            width: 640,
+            height: 480,
+            projection: Projection::Mono,
+            prepass: true,
+        }
+    }
+}
+
+/// Counters and timings of one GPU frame.
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    /// Output size in pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Distance evaluations of the prepass, the depth pass and the colour pass.
+    pub de_prepass: u64,
+    pub de_trace: u64,
+    pub de_shade: u64,
+    /// Primary rays that hit.
+    pub hits: u64,
+    /// From submission to the device finishing the passes.
+    pub ms_gpu: f64,
+    /// The whole frame: uploads, passes and readback.
+    pub ms_total: f64,
+}
+
+impl RenderStats {
+    /// Distance evaluations of the depth passes (prepass and primary rays) per pixel, the
+    /// CPU tracer's definition.
+    pub fn de_per_pixel(&self) -> f64 {
+        (self.de_prepass + self.de_trace) as f64 / (self.width as f64 * self.height as f64)
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Globals {
+    v: [[f32; 4]; 11],
+    dims: [u32; 4],
+    dims2: [u32; 4],
+    lights: [[f32; 4]; 16],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GPx {
+    cd: [f32; 4],
+    n: [f32; 4],
+    misc: [u32; 4],
+}
+
+/// Buffers and the output texture for one output size (rebuilt only when it changes).
+pub(crate) struct Targets {
+    key: (u32, u32, u32),
+    globals: wgpu::Buffer,
+    gbuf: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    /// The displayable result (8-bit sRGB), for a window to sample.
+    pub texture: wgpu::Texture,
+    group: wgpu::BindGroup,
+}
+
+/// Cells of all prepass levels for a `w` x `h` view and `eyes` eyes.
+fn grid_cells(w: u32, h: u32, eyes: u32) -> u64 {
+    [8u32, 4, 2]
+        .iter()
+        .map(|b| (w.div_ceil(*b) * h.div_ceil(*b)) as u64 * eyes as u64)
+        .sum()
+}
+
+impl Renderer {
+    fn targets(&mut self, o: &RenderOptions) -> Result<&Targets, GpuError> {
+        let (ow, oh) = o.projection.output_size(o.width, o.height);
+        let key = (o.width, o.height, o.projection.mode());
+        if self.targets.as_ref().is_some_and(|t| t.key == key) {
+            return Ok(self.targets.as_ref().unwrap());
+        }
+        self.targets = None;
+        let dev = &self.gpu.device;
+        let max = self.gpu.limits.max_storage_buffer_binding_size;
+        let px = ow as u64 * oh as u64;
+        let gbytes = px * std::mem::size_of::<GPx>() as u64;
+        if gbytes > max {
+            return Err(GpuError::BufferTooLarge {
+                what: format!("the G-buffer of a {ow}x{oh} image"),
+                bytes: gbytes,
+                limit: max,
+            });
+        }
+        let buf = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            dev.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        let globals = buf(
+            "fathom globals",
+            std::mem::size_of::<Globals>() as u64,
+            U::UNIFORM | U::COPY_DST,
+        );
+        let grid = buf(
+            "fathom prepass grid",
+            grid_cells(o.width, o.height, o.projection.eyes()) * 4,
+            U::STORAGE,
+        );
+        let gbuf = buf("fathom gbuffer", gbytes, U::STORAGE | U::COPY_SRC);
+        let counters = buf(
+            "fathom counters",
+            16,
+            U::STORAGE | U::COPY_SRC | U::COPY_DST,
+        );
+        let texture = dev.create_texture(&wgpu::TextureDescriptor {
+            label: Some("fathom image"),
+            size: wgpu::Extent3d {
+                width: ow,
+                height: oh,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("fathom render"),
+            layout: &self.pipes.render_layout,
+            entries: &[
+                entry(2, globals.as_entire_binding()),
+                entry(3, self.materials.as_entire_binding()),
+                entry(4, grid.as_entire_binding()),
+                entry(5, gbuf.as_entire_binding()),
+                entry(6, wgpu::BindingResource::TextureView(&view)),
+                entry(7, counters.as_entire_binding()),
+            ],
+        });
+        self.targets = Some(Targets {
+            key,
+            globals,
+            gbuf,
+            counters,
+            texture,
+            group,
+        });
+        Ok(self.targets.as_ref().unwrap())
+    }
+
+    /// Compiles `scene`, uploads its tape and renders it.
+    pub fn render_scene(
+        &mut self,
+        scene: &Scene,
+        o: &RenderOptions,
+    ) -> Result<(Frame, RenderStats), GpuError> {
+        let tape = Tape::compile(scene).map_err(|e| GpuError::Invalid(e.to_string()))?;
+        self.set_tape(&tape)?;
+        self.render(scene, &tape, o)
+    }
+
+    /// Renders the tape last given to [`Renderer::set_tape`] (`tape` must be that tape; it is
+    /// read on the CPU for the eye's distance bound) with `scene`'s camera, lights and settings.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        tape: &Tape,
+        o: &RenderOptions,
+    ) -> Result<(Frame, RenderStats), GpuError> {
+        let start = Instant::now();
+        if o.width == 0 || o.height == 0 {
+            return Err(GpuError::Invalid(format!(
+                "image size {}x{} is empty",
+                o.width, o.height
+            )));
+        }
+        let sep = o.projection.separation();
+        if !(sep.is_finite() && sep >= 0.0) {
+            return Err(GpuError::Invalid(format!(
+                "eye separation {sep} must be a finite number >= 0"
+            )));
+        }
+        let (ow, oh) = o.projection.output_size(o.width, o.height);
+        let tex_max = self.gpu.limits.max_texture_dimension_2d;
+        if ow > tex_max || oh > tex_max {
+            return Err(GpuError::ImageTooLarge {
+                width: ow,
+                height: oh,
+                limit: tex_max,
+            });
+        }
+        scene.validate().map_err(GpuError::Invalid)?;
+        self.gpu.check_lost()?;
+        let mut cam = scene.camera.frame();
+        if let Projection::Ods { .. } = o.projection {
+            // A panorama is levelled: latitude 0 is the plane normal to the camera's up
+            // vector, longitude 0 the view direction projected onto it.
+            let up = scene.camera.up.normalize();
+            let f = (cam.forward - up * cam.forward.dot(up)).normalize();
+            cam.right = f.cross(up);
+            cam.up = up;
+            cam.forward = f;
+        }
+        let pixel_angle = match o.projection {
+            Projection::Ods { .. } => {
+                (std::f64::consts::PI / o.height as f64).max(std::f64::consts::TAU / o.width as f64)
+            }
+            _ => cam.pixel_angle(o.height),
+        };
+        let footprint = pixel_angle * (scene.camera.target - scene.camera.eye).length();
+        let eye_dist = scene.camera.eye.length();
+        if precision::too_deep(footprint, eye_dist) {
+            return Err(GpuError::TooDeep {
+                footprint,
+                distance: eye_dist,
+            });
+        }
+        let e = cam.eye;
+        let d_eye = Evaluator::<f64>::new()
+            .distance(tape, V3::new(e.x, e.y, e.z))
+            .max(0.0);
+        // Stereo eyes sit up to half the separation away from the camera position.
+        let d_eye = (d_eye - 0.5 * sep).max(0.0);
+        let t_start = if d_eye.is_finite() {
+            (d_eye * 0.999) as f32
+        } else {
+            0.0
+        };
+        let r = &scene.render;
+        let split = |v: glam::DVec3| {
+            let (x, y, z) = (
+                precision::split(v.x),
+                precision::split(v.y),
+                precision::split(v.z),
+            );
+            ([x.0, y.0, z.0], [x.1, y.1, z.1])
+        };
+        let (hi, lo) = split(e);
+        let v3 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+        let c3 = |c: [f64; 3], w: f64| [c[0] as f32, c[1] as f32, c[2] as f32, w as f32];
+        let view_scale = (scene.camera.target - scene.camera.eye).length();
+        let mut lights = [[0f32; 4]; 16];
+        for (i, l) in scene.lights.iter().enumerate().take(8) {
+            let d = l.direction.normalize();
+            lights[2 * i] = [d.x as f32, d.y as f32, d.z as f32, l.shadows as u32 as f32];
+            lights[2 * i + 1] = c3(l.colour.map(|c| c * l.intensity), 0.0);
+        }
+        let g = Globals {
+            v: [
+                [hi[0], hi[1], hi[2], pixel_angle as f32],
+                [lo[0], lo[1], lo[2], cam.tan_half_fov as f32],
+                v3(cam.forward, r.max_distance),
+                v3(cam.right, 0.5 * pixel_angle * r.pixel_epsilon),
+                [cam.up.x as f32, cam.up.y as f32, cam.up.z as f32, t_start],
+                c3(r.sky_top, r.ambient),
+                c3(r.sky_bottom, r.ao),
+                c3(r.palette[0], 0.05 * view_scale),
+                c3(r.palette[1], r.shadow_softness),
+                c3(r.palette[2], r.fog),
+                c3(r.palette[3], sep),
+            ],
+            dims: [o.width, o.height, o.projection.mode(), r.max_steps],
+            dims2: [
+                scene.lights.len().min(8) as u32,
+                self.n_materials.max(1),
+                o.projection.eyes(),
+                o.prepass as u32,
+            ],
+            lights,
+        };
+        let eyes = o.projection.eyes();
+        self.targets(o)?;
+        let t = self.targets.as_ref().unwrap();
+        let q = &self.gpu.queue;
+        q.write_buffer(&t.globals, 0, bytemuck::bytes_of(&g));
+        q.write_buffer(&t.counters, 0, &[0u8; 16]);
+        let mut enc = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+            pass.set_bind_group(0, &self.tape_group, &[]);
+            pass.set_bind_group(1, &t.group, &[]);
+            if o.prepass {
+                for (l, b) in [8u32, 4, 2].iter().enumerate() {
+                    pass.set_pipeline(&self.pipes.prepass[l]);
+                    let cw = o.width.div_ceil(*b);
+                    let ch = o.height.div_ceil(*b) * eyes;
+                    pass.dispatch_workgroups(cw.div_ceil(8), ch.div_ceil(8), 1);
+                }
+            }
+            pass.set_pipeline(&self.pipes.depth);
+            pass.dispatch_workgroups(ow.div_ceil(8), oh.div_ceil(8), 1);
+            pass.set_pipeline(&self.pipes.shade);
+            pass.dispatch_workgroups(ow.div_ceil(8), oh.div_ceil(8), 1);
+        }
+        let gpu_start = Instant::now();
+        q.submit([enc.finish()]);
+        // Generous: a software adapter compiles the pipelines on their first dispatch.
+        self.gpu.wait(900)?;
+        let ms_gpu = gpu_start.elapsed().as_secs_f64() * 1e3;
+        let gbytes = self.gpu.read_buffer(&t.gbuf, t.gbuf.size())?;
+        let cbytes = self.gpu.read_buffer(&t.counters, 16)?;
+        let px: &[GPx] = bytemuck::cast_slice(&gbytes);
+        let counts: &[u32] = bytemuck::cast_slice(&cbytes);
+        let mut frame = Frame::new(ow, oh);
+        for (i, p) in px.iter().enumerate().take(frame.len()) {
+            frame.colour[i] = [p.cd[0], p.cd[1], p.cd[2]];
+            frame.steps[i] = p.misc[1];
+            if p.misc[2] == 1 {
+                frame.depth[i] = p.cd[3];
+                frame.normal[i] = [p.n[0], p.n[1], p.n[2]];
+                frame.id[i] = p.misc[0];
+            } else {
+                frame.id[i] = NO_ID;
+            }
+        }
+        let stats = RenderStats {
+            width: ow,
+            height: oh,
+            de_prepass: counts[0] as u64,
+            de_trace: counts[1] as u64,
+            de_shade: counts[2] as u64,
+            hits: frame.depth.iter().filter(|d| d.is_finite()).count() as u64,
+            ms_gpu,
+            ms_total: start.elapsed().as_secs_f64() * 1e3,
+        };
+        Ok((frame, stats))
+    }
+
+    /// The displayable image of the last render (8-bit sRGB), for a window to show.
+    pub fn output_texture(&self) -> Option<&wgpu::Texture> {
+        self.targets.as_ref().map(|t| &t.texture)
+    }
+}

@@ -1,0 +1,96 @@
+// The tape interpreter (mirrors fathom-core eval.rs; the encoding is docs/tape.md). The
+// `op_*` dispatch functions it calls are generated in Rust from the registry tables.
+
+const MAX_STACK: u32 = 34u;
+// Bound on executed instructions: the longest tape plus the longest IFS loop, so a corrupt
+// tape cannot hang the device.
+const MAX_EXECUTED: u32 = 16384u + 256u * 66u;
+
+// The stacks live in private memory: zero-initialised once per invocation rather than on every
+// call of `eval_tape` (a function-local array would be cleared each time). A valid tape always
+// pushes before it reads, so stale entries from an earlier call are never seen.
+var<private> pts: array<Pt, MAX_STACK>;
+var<private> vals: array<Val, MAX_STACK>;
+var<private> loop_rem: array<u32, 4>;
+var<private> loop_body: array<u32, 4>;
+
+fn eval_tape(pw: vec3f) -> Val {
+    var p = pw;
+    var k = 1.0;
+    var trap = NO_TRAP;
+    var np = 0u;
+    // The top of the value stack stays in registers (`top`); `vals[0 .. nv - 1]` hold the
+    // values below it, so a tape of one shape never touches the array.
+    var top = val_solid(1e20, 0.0, NO_TRAP);
+    var nv = 0u;
+    var nl = 0u;
+    var pc = 0u;
+    let len = arrayLength(&instrs);
+    for (var step = 0u; step < MAX_EXECUTED; step++) {
+        if pc >= len {
+            break;
+        }
+        let ins = instrs[pc];
+        pc += 1u;
+        let fam = ins.x >> 8u;
+        let i = ins.x & 0xffu;
+        let a = ins.y;
+        if fam == 0u {
+            if i == 0u {
+                break;
+            } else if i == 1u {
+                pts[np] = Pt(p, k, trap);
+                np += 1u;
+            } else if i == 2u {
+                np -= 1u;
+                let s = pts[np];
+                p = s.p;
+                k = s.k;
+                trap = s.trap;
+            } else if i == 3u {
+                let n = u32(params[a]);
+                if n == 0u {
+                    pc = ins.z;
+                } else {
+                    loop_rem[nl] = n;
+                    loop_body[nl] = pc;
+                    nl += 1u;
+                }
+            } else if i == 4u {
+                trap = min(trap, length(p));
+                loop_rem[nl - 1u] -= 1u;
+                if loop_rem[nl - 1u] > 0u {
+                    pc = ins.z;
+                } else {
+                    nl -= 1u;
+                }
+            }
+        } else if fam == 1u {
+            let d = op_prim(i, a, p);
+            if nv > 0u {
+                vals[nv - 1u] = top;
+            }
+            top = val_solid(d * k, f32(ins.z), trap);
+            nv += 1u;
+        } else if fam == 2u {
+            let e = op_frac(i, a, p);
+            if nv > 0u {
+                vals[nv - 1u] = top;
+            }
+            top = val_solid(e.x * k, f32(ins.z), min(e.y, trap));
+            nv += 1u;
+        } else if fam == 3u {
+            op_xf(i, a, &p, &k);
+        } else if fam == 4u {
+            top.d = op_mod(i, a, top.d, k);
+        } else if fam == 5u {
+            top = op_comb(i, a, vals[nv - 2u], top);
+            nv -= 1u;
+        }
+    }
+    return top;
+}
+
+fn eval_distance(p: vec3f) -> f32 {
+    return eval_tape(p).d;
+}

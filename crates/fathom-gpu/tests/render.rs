@@ -1,0 +1,167 @@
+//! The GPU renderer against the CPU tracer on every preset at 320x240, plus the promise that
+//! scene edits never build a shader module or pipeline.
+
+mod common;
+
+use common::renderer;
+
+use fathom_core::frame::Frame;
+use fathom_core::presets::{self, PRESETS};
+use fathom_core::primitives::Primitive;
+use fathom_core::scene::{Call, DomainOp, Node, Shape};
+use fathom_core::transforms::Transform;
+use fathom_core::{Scene, Tape};
+use fathom_gpu::{Projection, RenderOptions};
+use fathom_trace::post::to_rgb8;
+
+/// Largest per-channel difference of the 8-bit sRGB output that counts as "the same colour".
+const COLOUR_TOL: u8 = 8;
+
+fn cpu(scene: &Scene, w: u32, h: u32) -> Frame {
+    let o = fathom_trace::Options {
+        width: w,
+        height: h,
+        ..Default::default()
+    };
+    fathom_trace::render(scene, &o, &|_, _| {}).unwrap().0
+}
+
+fn mono(w: u32, h: u32) -> RenderOptions {
+    RenderOptions {
+        width: w,
+        height: h,
+        projection: Projection::Mono,
+        prepass: true,
+    }
+}
+
+/// Whether pixel `i` lies on a silhouette of `f`: a 3x3 neighbour differs in hit/miss.
+fn on_silhouette(f: &Frame, i: usize) -> bool {
+    let (x, y) = ((i as u32 % f.width) as i64, (i as u32 / f.width) as i64);
+    let hit = f.is_hit(i);
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            let (nx, ny) = (x + dx, y + dy);
+            if nx < 0 || ny < 0 || nx >= f.width as i64 || ny >= f.height as i64 {
+                continue;
+            }
+            if f.is_hit(f.index(nx as u32, ny as u32)) != hit {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// (fraction of pixels whose colours agree, hit/miss disagreements away from silhouettes).
+fn compare(a: &Frame, b: &Frame) -> (f64, usize, usize) {
+    let (ca, cb) = (to_rgb8(a), to_rgb8(b));
+    let mut same = 0;
+    let mut hit_bad = 0;
+    let mut hit_sil = 0;
+    for i in 0..a.len() {
+        let d = (0..3)
+            .map(|c| ca[3 * i + c].abs_diff(cb[3 * i + c]))
+            .max()
+            .unwrap();
+        if d <= COLOUR_TOL {
+            same += 1;
+        }
+        if a.is_hit(i) != b.is_hit(i) {
+            if on_silhouette(a, i) || on_silhouette(b, i) {
+                hit_sil += 1;
+            } else {
+                hit_bad += 1;
+            }
+        }
+    }
+    (same as f64 / a.len() as f64, hit_bad, hit_sil)
+}
+
+#[test]
+fn every_preset_matches_the_cpu_tracer_at_320x240() {
+    let mut r = renderer();
+    let mut report = Vec::new();
+    let mut ok = true;
+    for p in PRESETS {
+        let scene = presets::load(p.name).unwrap();
+        let c = cpu(&scene, 320, 240);
+        let (g, _) = r.render_scene(&scene, &mono(320, 240)).unwrap();
+        let (same, hit_bad, hit_sil) = compare(&c, &g);
+        report.push(format!(
+            "{}: {:.2}% of pixels within {COLOUR_TOL}/255, {hit_bad} hit/miss disagreements off silhouettes, {hit_sil} on them",
+            p.name,
+            same * 100.0
+        ));
+        ok &= same >= 0.99 && hit_bad == 0;
+    }
+    eprintln!("{}", report.join("\n"));
+    assert!(ok, "{}", report.join("\n"));
+}
+
+fn sphere_scene() -> Scene {
+    let mut s = Scene::new(Node::new(Primitive::Sphere));
+    s.camera.eye = glam::DVec3::new(0.0, 0.5, 3.5);
+    s
+}
+
+#[test]
+fn scene_edits_build_no_shader_or_pipeline() {
+    let mut r = renderer();
+    let mut scene = sphere_scene();
+    let o = mono(64, 48);
+    let (first, _) = r.render_scene(&scene, &o).unwrap();
+    let built = r.objects_built();
+    assert!(built.0 >= 1 && built.1 >= 5, "counters are live: {built:?}");
+
+    // A parameter edit: same instruction stream, new parameter buffer.
+    let mut tape = Tape::compile(&scene).unwrap();
+    scene.root.shape.set("radius", &[0.5]).unwrap();
+    tape.update_params(&scene).unwrap();
+    r.set_tape(&tape).unwrap();
+    let (smaller, _) = r.render(&scene, &tape, &o).unwrap();
+    let hits = |f: &Frame| (0..f.len()).filter(|&i| f.is_hit(i)).count();
+    assert!(hits(&smaller) < hits(&first), "the radius edit shows");
+
+    // A structure edit: a new child, a different shape kind, a new tape.
+    let mut child = Node::new(Call::<Shape>::from(Primitive::Box));
+    child.ops.push(Call {
+        kind: DomainOp::Transform(Transform::Translate),
+        params: vec![0.8, 0.0, 0.0],
+    });
+    scene.root.children.push(child);
+    let (grown, _) = r.render_scene(&scene, &o).unwrap();
+    assert!(hits(&grown) > hits(&smaller), "the structure edit shows");
+    assert_eq!(
+        r.objects_built(),
+        built,
+        "(shader modules, compute pipelines) must not change on edits"
+    );
+}
+
+#[test]
+fn bad_sizes_give_errors_not_panics() {
+    // Its own renderer: the simulated loss must not reach the other tests.
+    let mut r = common::fresh_renderer();
+    let scene = sphere_scene();
+    let e = r.render_scene(&scene, &mono(0, 10)).unwrap_err();
+    assert!(e.to_string().contains("empty"), "{e}");
+    let max = r.gpu().limits.max_texture_dimension_2d;
+    let e = r.render_scene(&scene, &mono(max + 1, 4)).unwrap_err();
+    assert!(e.to_string().contains("largest texture"), "{e}");
+    // A lost device is reported, not waited on.
+    r.gpu().simulate_loss("test");
+    let e = r.render_scene(&scene, &mono(8, 8)).unwrap_err();
+    assert!(e.to_string().contains("lost"), "{e}");
+}
+
+#[test]
+fn too_deep_a_zoom_hands_off_to_the_cpu() {
+    let mut r = renderer();
+    let mut scene = sphere_scene();
+    // A camera 1e-6 from its target near the sphere: pixel footprints of ~1e-9.
+    scene.camera.eye = glam::DVec3::new(0.0, 0.0, 1.000_001);
+    scene.camera.target = glam::DVec3::new(0.0, 0.0, 1.0);
+    let e = r.render_scene(&scene, &mono(64, 48)).unwrap_err();
+    assert!(e.to_string().contains("on the CPU"), "{e}");
+}
