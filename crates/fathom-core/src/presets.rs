@@ -32,7 +32,8 @@ pub fn find(name: &str) -> Result<&'static Preset, String> {
 /// Parses a preset into a scene.
 pub fn load(name: &str) -> Result<Scene, String> {
     let p = find(name)?;
-    scene_file::parse(p.text, &format!("<preset:{}>", p.name)).map_err(|e: SceneFileError| e.to_string())
+    scene_file::parse(p.text, &format!("<preset:{}>", p.name))
+        .map_err(|e: SceneFileError| e.to_string())
 }
 
 #[cfg(test)]
@@ -45,7 +46,8 @@ mod tests {
         for p in PRESETS {
             let s = load(p.name).unwrap_or_else(|e| panic!("{e}"));
             let text = scene_file::to_string(&s);
-            let back = scene_file::parse(&text, "roundtrip").unwrap_or_else(|e| panic!("{}: {e}\n{text}", p.name));
+            let back = scene_file::parse(&text, "roundtrip")
+                .unwrap_or_else(|e| panic!("{}: {e}\n{text}", p.name));
             assert_eq!(back, s, "{} does not round-trip", p.name);
             Tape::compile(&s).unwrap_or_else(|e| panic!("{}: {e}", p.name));
         }

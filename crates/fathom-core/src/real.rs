@@ -399,8 +399,18 @@ mod tests {
         let pos = [1e-3, 0.1, 0.5, 1.0, 2.0, 7.5, 100.0, 1e4];
         check_lanes(<F32x8 as Real>::ln, f64::ln, pos, 1e-6);
         check_lanes(<F32x8 as Real>::sqrt, f64::sqrt, pos, 1e-7);
-        check_lanes(|v| Real::powf(v, F32x8::splat(8.0)), |x| x.powf(8.0), pos, 1e-5);
-        check_lanes(|v| Real::atan2(v, F32x8::splat(-0.7)), |y| y.atan2(-0.7), xs, 1e-6);
+        check_lanes(
+            |v| Real::powf(v, F32x8::splat(8.0)),
+            |x| x.powf(8.0),
+            pos,
+            1e-5,
+        );
+        check_lanes(
+            |v| Real::atan2(v, F32x8::splat(-0.7)),
+            |y| y.atan2(-0.7),
+            xs,
+            1e-6,
+        );
     }
 
     #[test]

@@ -11,7 +11,12 @@ use thiserror::Error;
 pub enum SceneFileError {
     /// The text is not a valid scene; `line`/`col` are 1-based.
     #[error("{origin}:{line}:{col}: {msg}")]
-    Syntax { origin: String, line: usize, col: usize, msg: String },
+    Syntax {
+        origin: String,
+        line: usize,
+        col: usize,
+        msg: String,
+    },
     /// The scene parsed but breaks a limit or rule (the message names the node path).
     #[error("{origin}: {msg}")]
     Invalid { origin: String, msg: String },
@@ -28,7 +33,10 @@ pub enum SceneFileError {
 /// Parses scene text. `origin` names the source in error messages (a path, or `<preset:NAME>`).
 pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneFileError> {
     if text.len() as u64 > limits::MAX_SCENE_FILE_BYTES {
-        return Err(SceneFileError::TooLarge { origin: origin.into(), size: text.len() as u64 });
+        return Err(SceneFileError::TooLarge {
+            origin: origin.into(),
+            size: text.len() as u64,
+        });
     }
     let opts = ron::Options::default().with_recursion_limit(4 * limits::MAX_TREE_DEPTH + 16);
     let scene: Scene = opts.from_str(text).map_err(|e| SceneFileError::Syntax {
@@ -37,14 +45,20 @@ pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneFileError> {
         col: e.span.start.col,
         msg: e.code.to_string(),
     })?;
-    scene.validate().map_err(|msg| SceneFileError::Invalid { origin: origin.into(), msg })?;
+    scene.validate().map_err(|msg| SceneFileError::Invalid {
+        origin: origin.into(),
+        msg,
+    })?;
     Ok(scene)
 }
 
 /// Reads and parses a scene file, refusing oversized files before reading them.
 pub fn load(path: &Path) -> Result<Scene, SceneFileError> {
     let origin = path.display().to_string();
-    let io = |source| SceneFileError::Io { origin: origin.clone(), source };
+    let io = |source| SceneFileError::Io {
+        origin: origin.clone(),
+        source,
+    };
     let size = std::fs::metadata(path).map_err(io)?.len();
     if size > limits::MAX_SCENE_FILE_BYTES {
         return Err(SceneFileError::TooLarge { origin, size });
@@ -55,12 +69,18 @@ pub fn load(path: &Path) -> Result<Scene, SceneFileError> {
 
 /// The scene as scene-file text.
 pub fn to_string(scene: &Scene) -> String {
-    let cfg = ron::ser::PrettyConfig::new().indentor("    ".to_string()).struct_names(true);
-    ron::Options::default().to_string_pretty(scene, cfg).expect("a scene always serialises")
+    let cfg = ron::ser::PrettyConfig::new()
+        .indentor("    ".to_string())
+        .struct_names(true);
+    ron::Options::default()
+        .to_string_pretty(scene, cfg)
+        .expect("a scene always serialises")
 }
 
 /// Writes a scene file.
 pub fn save(path: &Path, scene: &Scene) -> Result<(), SceneFileError> {
-    std::fs::write(path, to_string(scene))
-        .map_err(|source| SceneFileError::Io { origin: path.display().to_string(), source })
+    std::fs::write(path, to_string(scene)).map_err(|source| SceneFileError::Io {
+        origin: path.display().to_string(),
+        source,
+    })
 }
