@@ -23,17 +23,27 @@ pub fn nearest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) ->
     v.into_iter().map(|(_, c)| c).collect()
 }
 
+/// "did you mean `a`? valid choices (nearest first): a, b, c" (or a note that there are none).
+pub fn did_you_mean<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> String {
+    let near = nearest(name, candidates);
+    match near.first() {
+        None => "there are no valid choices here".into(),
+        Some(first) => format!(
+            "did you mean `{first}`? valid choices (nearest first): {}",
+            near.join(", ")
+        ),
+    }
+}
+
 /// "unknown X `name`; did you mean `a`? valid choices (nearest first): a, b, c"
 pub fn unknown_name<'a>(
     noun: &str,
     name: &str,
     candidates: impl IntoIterator<Item = &'a str>,
 ) -> String {
-    let near = nearest(name, candidates);
-    let first = near.first().copied().unwrap_or("");
     format!(
-        "unknown {noun} `{name}`; did you mean `{first}`? valid choices (nearest first): {}",
-        near.join(", ")
+        "unknown {noun} `{name}`; {}",
+        did_you_mean(name, candidates)
     )
 }
 
@@ -109,6 +119,10 @@ impl<'de, K: Family> Deserialize<'de> for Call<K> {
     }
 }
 
+/// How RON words `ExpectedStructLike` (a missing `(`); compared as text because the visitor
+/// sees RON's error only through serde's generic error type.
+const RON_EXPECTED_PAREN: &str = "Expected opening `(`";
+
 struct CallVisitor<K>(PhantomData<K>);
 
 impl<'de, K: Family> Visitor<'de> for CallVisitor<K> {
@@ -132,7 +146,14 @@ impl<'de, K: Family> Visitor<'de> for CallVisitor<K> {
             variant.unit_variant()?;
             return Ok(Call::new(kind));
         }
-        variant.struct_variant(param_names(def), ParamsVisitor { kind })
+        // A bare `Name` (no parentheses) for an entry with parameters takes all defaults. RON
+        // reports the missing `(` as `ExpectedStructLike` before consuming anything, and no
+        // error from inside the parameters can have that text (see `ParamSeed`), so the
+        // parser is still just after the name and can carry on.
+        match variant.struct_variant(param_names(def), ParamsVisitor { kind }) {
+            Err(e) if e.to_string() == RON_EXPECTED_PAREN => Ok(Call::new(kind)),
+            r => r,
+        }
     }
 
     // `Name` written bare (no parentheses) for an entry with parameters: all defaults.
@@ -196,7 +217,7 @@ impl<'de, K: Family> Visitor<'de> for ParamsVisitor<K> {
                 return Err(de::Error::custom(format!(
                     "`{}` has no parameter `{key}`; {}",
                     def.name,
-                    unknown_name("parameter", &key, def.params.iter().map(|p| p.name))
+                    did_you_mean(&key, def.params.iter().map(|p| p.name))
                 )));
             };
             if seen[i] {
@@ -207,7 +228,10 @@ impl<'de, K: Family> Visitor<'de> for ParamsVisitor<K> {
             }
             seen[i] = true;
             let spec = &def.params[i];
-            let values = map.next_value_seed(ParamSeed(spec.kind))?;
+            let values = map.next_value_seed(ParamSeed {
+                entry: def.name,
+                spec,
+            })?;
             let (off, _) = def.param(&key).expect("declared parameter");
             spec.check(&values)
                 .map_err(|e| de::Error::custom(format!("{}: {e}", def.name)))?;
@@ -217,16 +241,40 @@ impl<'de, K: Family> Visitor<'de> for ParamsVisitor<K> {
     }
 }
 
-/// Reads one parameter value of the given kind: a number, or `(x, y, z)`.
-struct ParamSeed(ParamKind);
+/// Reads one parameter value of the given kind: a number, or `(x, y, z)`. A value of the
+/// wrong shape is reported naming the parameter and what it takes.
+struct ParamSeed {
+    entry: &'static str,
+    spec: &'static crate::registry::ParamSpec,
+}
 
 impl<'de> DeserializeSeed<'de> for ParamSeed {
     type Value = Vec<f64>;
     fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Vec<f64>, D::Error> {
-        match self.0 {
-            ParamKind::Scalar | ParamKind::Int => Ok(vec![f64::deserialize(d)?]),
+        let r = match self.spec.kind {
+            ParamKind::Scalar | ParamKind::Int => f64::deserialize(d).map(|x| vec![x]),
             ParamKind::Vec3 => d.deserialize_tuple(3, V3Visitor),
-        }
+        };
+        r.map_err(|e| {
+            let text = e.to_string();
+            let wrong_shape = text == RON_EXPECTED_PAREN
+                || text == "Expected float"
+                || text == "Expected integer"
+                || (text.starts_with("Expected ") && text.ends_with(" instead"));
+            if wrong_shape {
+                let takes = match self.spec.kind {
+                    ParamKind::Scalar => "a number",
+                    ParamKind::Int => "a whole number",
+                    ParamKind::Vec3 => "a vector `(x, y, z)` of three numbers",
+                };
+                de::Error::custom(format!(
+                    "parameter `{}` of `{}` takes {takes}",
+                    self.spec.name, self.entry
+                ))
+            } else {
+                e
+            }
+        })
     }
 }
 

@@ -10,6 +10,7 @@
 pub mod call_serde;
 pub mod camera;
 pub mod combine;
+pub mod docgen;
 pub mod eval;
 pub mod fractals;
 pub mod limits;
@@ -22,6 +23,8 @@ pub mod registry;
 pub mod scene;
 pub mod scene_file;
 pub mod tape;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 pub mod transforms;
 pub mod value;
 pub mod vec3;

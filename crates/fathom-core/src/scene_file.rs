@@ -1,15 +1,23 @@
 //! Scene files: the versioned, human-readable text form of a [`Scene`] (RON), with errors that
 //! name file:line:column, what was expected, and for unknown names the valid choices.
+//!
+//! Reading goes in three passes, each refusing bad input before the next allocates for it:
+//! the size limit; a light lexer ([`lex`]) that refuses non-finite numbers (`NaN`, `inf`,
+//! `1e999`) with their position; a probe of `version` so a file from another format version
+//! says so instead of failing on some later field; then the RON parse proper (with a recursion
+//! limit, so absurd nesting is an error and not a stack overflow) and [`Scene::validate`].
 
 use crate::limits;
-use crate::scene::Scene;
+use crate::scene::{SCENE_VERSION, Scene};
 use std::path::Path;
 use thiserror::Error;
+
+mod lex;
 
 /// Why a scene file could not be read or written.
 #[derive(Debug, Error)]
 pub enum SceneFileError {
-    /// The text is not a valid scene; `line`/`col` are 1-based.
+    /// The text is not a valid scene; `line`/`col` are 1-based (columns count characters).
     #[error("{origin}:{line}:{col}: {msg}")]
     Syntax {
         origin: String,
@@ -20,15 +28,31 @@ pub enum SceneFileError {
     /// The scene parsed but breaks a limit or rule (the message names the node path).
     #[error("{origin}: {msg}")]
     Invalid { origin: String, msg: String },
+    /// The file could not be read or written.
     #[error("{origin}: {source}")]
     Io {
         origin: String,
         #[source]
         source: std::io::Error,
     },
+    /// The file is larger than [`limits::MAX_SCENE_FILE_BYTES`]; it was not read.
     #[error("{origin}: the file is {size} bytes; scene files are limited to {max} bytes", max = limits::MAX_SCENE_FILE_BYTES)]
     TooLarge { origin: String, size: u64 },
 }
+
+impl SceneFileError {
+    /// The 1-based (line, column) the error points at, if it has one.
+    pub fn position(&self) -> Option<(usize, usize)> {
+        match self {
+            SceneFileError::Syntax { line, col, .. } => Some((*line, *col)),
+            _ => None,
+        }
+    }
+}
+
+/// RON nesting allowed while parsing: each tree level costs a few levels of brackets (the node,
+/// its children list, its calls), plus the scene's own few.
+const RECURSION_LIMIT: usize = 4 * limits::MAX_TREE_DEPTH + 16;
 
 /// Parses scene text. `origin` names the source in error messages (a path, or `<preset:NAME>`).
 pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneFileError> {
@@ -38,18 +62,134 @@ pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneFileError> {
             size: text.len() as u64,
         });
     }
-    let opts = ron::Options::default().with_recursion_limit(4 * limits::MAX_TREE_DEPTH + 16);
-    let scene: Scene = opts.from_str(text).map_err(|e| SceneFileError::Syntax {
+    let syntax = |(line, col): (usize, usize), msg: String| SceneFileError::Syntax {
         origin: origin.into(),
-        line: e.span.start.line,
-        col: e.span.start.col,
-        msg: e.code.to_string(),
+        line,
+        col,
+        msg,
+    };
+    let tokens = lex::scan(text).map_err(|e| syntax(e.pos, e.msg))?;
+    check_version(&tokens).map_err(|(pos, msg)| syntax(pos, msg))?;
+    let opts = ron::Options::default().with_recursion_limit(RECURSION_LIMIT);
+    let scene: Scene = opts.from_str(text).map_err(|e| {
+        let pos = (e.span.start.line, e.span.start.col);
+        let mut msg = describe(&e.code);
+        // RON often reports a truncated file as a missing comma; say what really happened.
+        let at_end = (e.span.end.line, e.span.end.col) >= lex::end_position(text.trim_end());
+        if at_end && !matches!(e.code, ron::Error::Eof) {
+            msg = format!("unexpected end of file ({msg}); a closing bracket is probably missing");
+        }
+        syntax(pos, msg)
     })?;
     scene.validate().map_err(|msg| SceneFileError::Invalid {
         origin: origin.into(),
         msg,
     })?;
     Ok(scene)
+}
+
+/// Checks the top-level `version` field from the tokens alone, before the full parse, so that
+/// a file written for another format version says so instead of failing on some later field.
+fn check_version(tokens: &[lex::Token]) -> Result<(), ((usize, usize), String)> {
+    let Some((pos, value)) = lex::top_level_number(tokens, "version") else {
+        return Ok(()); // a missing or malformed version is reported by the full parse
+    };
+    if value.parse::<u64>().ok() == Some(SCENE_VERSION as u64) {
+        return Ok(());
+    }
+    Err((
+        pos,
+        format!(
+            "scene format version {value} is not supported; this build of fathom reads \
+             version {SCENE_VERSION} only (supported versions: {SCENE_VERSION})"
+        ),
+    ))
+}
+
+/// A readable message for each RON error, saying what was expected.
+fn describe(code: &ron::Error) -> String {
+    use ron::Error as E;
+    match code {
+        E::Message(s) => s.clone(),
+        E::Eof => "unexpected end of file: a closing `)` or `]` is probably missing".into(),
+        E::ExpectedComma => {
+            "expected `,` between items, or a closing `)` or `]` after the last one".into()
+        }
+        E::ExpectedStructLike => "expected `(` opening a structure; write `Name()` to take \
+                                  every default"
+            .into(),
+        E::ExpectedNamedStructLike("") => "expected `(` opening a structure".into(),
+        E::ExpectedNamedStructLike(name) => format!("expected `{name}(...)` here"),
+        E::ExpectedStructLikeEnd => {
+            "expected `)` closing the structure, or a `,` before the next field".into()
+        }
+        E::ExpectedArray => "expected a list `[ ... ]`".into(),
+        E::ExpectedArrayEnd => "expected `]` closing the list, or a `,` between items".into(),
+        E::ExpectedFloat => "expected a number".into(),
+        E::ExpectedInteger => "expected a whole number".into(),
+        E::FloatUnderscore | E::UnderscoreAtBeginning => {
+            "a number may not start with or contain `_` here".into()
+        }
+        E::IntegerOutOfBounds => "whole number out of range for this field".into(),
+        E::InvalidIntegerDigit { digit, base } => {
+            format!("invalid digit `{digit}` in a base-{base} number")
+        }
+        E::ExpectedBoolean => "expected `true` or `false`".into(),
+        E::ExpectedOption => "expected `None` or `Some(...)`".into(),
+        E::ExpectedOptionEnd => "expected `)` closing `Some(...)`".into(),
+        E::ExpectedMapColon => "expected `:` after the field name".into(),
+        E::ExpectedIdentifier => "expected a name".into(),
+        E::ExpectedUnit => "expected `()`".into(),
+        E::UnexpectedChar(c) => format!("unexpected character `{}`", c.escape_default()),
+        E::TrailingCharacters => {
+            "unexpected text after the end of the scene (a file holds one `Scene(...)`)".into()
+        }
+        E::UnclosedBlockComment => "a `/*` comment is never closed".into(),
+        E::ExpectedDifferentStructName { expected, found } => {
+            format!("expected `{expected}(...)` here, found `{found}`")
+        }
+        E::ExpectedStructName(name) => format!("expected `{name}(...)` here"),
+        E::InvalidValueForType { expected, found } => format!("expected {expected}, found {found}"),
+        E::ExpectedDifferentLength { expected, found } => {
+            format!("expected {expected}, found {found} element(s)")
+        }
+        E::NoSuchEnumVariant {
+            expected, found, ..
+        } => crate::call_serde::unknown_name("choice", found, expected.iter().copied()),
+        E::NoSuchStructField {
+            expected,
+            found,
+            outer,
+        } => {
+            let noun = match outer {
+                Some(o) => format!("field of `{o}`"),
+                None => "field".into(),
+            };
+            crate::call_serde::unknown_name(&noun, found, expected.iter().copied())
+        }
+        E::MissingStructField { field, outer } => match outer {
+            Some(o) => format!("`{o}` is missing its required field `{field}`"),
+            None => format!("missing required field `{field}`"),
+        },
+        E::DuplicateStructField { field, outer } => match outer {
+            Some(o) => format!("field `{field}` of `{o}` is given twice"),
+            None => format!("field `{field}` is given twice"),
+        },
+        E::ExceededRecursionLimit => format!(
+            "the text is nested too deeply (more than {RECURSION_LIMIT} levels of brackets); \
+             scene trees are limited to {} levels",
+            limits::MAX_TREE_DEPTH
+        ),
+        E::Utf8Error(e) => format!("the file is not valid UTF-8: {e}"),
+        other => {
+            let s = other.to_string();
+            let mut c = s.chars();
+            match c.next() {
+                Some(f) => f.to_lowercase().chain(c).collect(),
+                None => s,
+            }
+        }
+    }
 }
 
 /// Reads and parses a scene file, refusing oversized files before reading them.
@@ -63,7 +203,18 @@ pub fn load(path: &Path) -> Result<Scene, SceneFileError> {
     if size > limits::MAX_SCENE_FILE_BYTES {
         return Err(SceneFileError::TooLarge { origin, size });
     }
-    let text = std::fs::read_to_string(path).map_err(io)?;
+    let bytes = std::fs::read(path).map_err(io)?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let valid = String::from_utf8_lossy(valid);
+        let (line, col) = lex::end_position(&valid);
+        SceneFileError::Syntax {
+            origin: origin.clone(),
+            line,
+            col,
+            msg: "the file is not valid UTF-8 text".into(),
+        }
+    })?;
     parse(&text, &origin)
 }
 
@@ -84,3 +235,8 @@ pub fn save(path: &Path, scene: &Scene) -> Result<(), SceneFileError> {
         source,
     })
 }
+
+#[cfg(test)]
+mod fuzz;
+#[cfg(test)]
+mod tests;
