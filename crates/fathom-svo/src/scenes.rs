@@ -1,34 +1,30 @@
-//! Code-built scenes for the zoom presets and the tests: the Menger sponge as an IFS of folds
-//! on a box, and a sphere. (The Mandelbulb comes from fathom-core's presets.)
+//! Code-built scenes for the zoom presets and the tests: the Menger sponge, the Mandelbox and a
+//! sphere. (The Mandelbulb comes from fathom-core's presets.)
 
+use fathom_core::fractals::Fractal;
 use fathom_core::primitives::Primitive;
-use fathom_core::scene::{Call, Ifs, Material, Node, Scene};
-use fathom_core::transforms::Transform;
+use fathom_core::scene::{Call, Material, Node, Scene};
 use glam::DVec3;
 
-/// The Menger sponge spanning `[-1, 1]^3` as an IFS: per iteration abs + sort (x >= y >= z),
-/// scale by 3 about (1, 1, 1), then fold z about -1 (`z -> |z + 1| - 1`), which is the
-/// classic conditional `if z < -1 { z += 2 }` up to the sign the next abs removes. The result
-/// is a distance bound (folds are 1-Lipschitz).
+/// The Menger sponge spanning `[-1, 1]^3` (fathom-core's `Menger` estimator, a distance
+/// bound) with `iterations` levels of holes.
 pub fn menger(iterations: u32) -> Scene {
-    let ops = vec![
-        Call::new(Transform::FoldMenger),
-        Call::new(Transform::ScaleAbout)
-            .with("factor", &[3.0])
-            .with("centre", &[1.0, 1.0, 1.0]),
-        Call::new(Transform::Translate).with("offset", &[0.0, 0.0, -1.0]),
-        Call::new(Transform::FoldAbs),
-        Call::new(Transform::Translate).with("offset", &[0.0, 0.0, 1.0]),
-    ];
-    let root =
-        Node::new(Call::new(Primitive::Box).with("size", &[1.0, 1.0, 1.0])).material(Material {
-            albedo: [0.8, 0.75, 0.65],
-            trap_colour: 0.35,
-            ..Material::default()
-        });
+    let shape = Call::new(Fractal::Menger).with("iterations", &[iterations as f64]);
+    let root = Node::new(shape).material(Material {
+        albedo: [0.8, 0.75, 0.65],
+        trap_colour: 0.35,
+        ..Material::default()
+    });
     let mut s = Scene::new(root);
-    s.ifs = Some(Ifs { iterations, ops });
     s.camera.eye = DVec3::new(2.6, 2.0, 3.2);
+    s.camera.target = DVec3::ZERO;
+    s
+}
+
+/// The Mandelbox with fathom-core's default parameters (scale -1.5).
+pub fn mandelbox() -> Scene {
+    let mut s = Scene::new(Node::new(Call::new(Fractal::Mandelbox)));
+    s.camera.eye = DVec3::new(3.0, 2.4, 4.2);
     s.camera.target = DVec3::ZERO;
     s
 }
@@ -57,6 +53,10 @@ mod tests {
         assert!(d([1.0, 2.0 / 3.0, 2.0 / 3.0]) > 0.1);
         // A solid point: in the corner subcube at its own corner region.
         assert!(d([0.95, 0.95, 0.95]) <= 0.0 + 1e-12);
-        assert!((d([3.0, 0.5, 0.5]) - 2.0).abs() < 1e-9);
+        assert!((d([3.0, 0.5, 0.5]) - 2.0).abs() < 1e-6);
+        let b = Tape::compile(&mandelbox()).unwrap();
+        for p in [[3.0, 0.0, 0.0], [0.0, 3.0, 0.0], [2.2, 2.2, 2.2]] {
+            assert!(b.eval_f64(p).d > 0.0, "the Mandelbox reaches {p:?}");
+        }
     }
 }

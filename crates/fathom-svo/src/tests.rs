@@ -98,13 +98,15 @@ fn trace_mask(scene: &Scene, cam: &Camera, w: u32, h: u32, eps: f64) -> Vec<bool
 fn silhouette(
     scene: &Scene,
     cam: &Camera,
-    w: u32,
-    h: u32,
+    half: f64,
+    (w, h): (u32, u32),
     fid: f64,
     eps: f64,
 ) -> (f64, usize, usize) {
     let mut c = cfg(w, h);
     c.fidelity = fid;
+    c.root_min = DVec3::splat(-half);
+    c.root_size = 2.0 * half;
     let mut ex = Explorer::new(scene, c).unwrap();
     let frames = ex.settle(cam, 100);
     assert!(frames < 100, "the octree did not settle");
@@ -120,15 +122,17 @@ fn silhouette(
 #[test]
 fn no_false_negatives_against_the_sphere_tracer() {
     let mb = fathom_core::presets::load("mandelbulb").unwrap();
-    let cases: Vec<(&str, Scene, Camera)> = vec![
-        ("sphere", scenes::sphere(1.0), Camera::default()),
-        ("menger", scenes::menger(6), corner_camera()),
-        ("mandelbulb", mb.clone(), mb.camera.clone()),
+    let mbox = scenes::mandelbox();
+    let cases: Vec<(&str, Scene, Camera, f64)> = vec![
+        ("sphere", scenes::sphere(1.0), Camera::default(), 2.0),
+        ("menger", scenes::menger(6), corner_camera(), 2.0),
+        ("mandelbulb", mb.clone(), mb.camera.clone(), 2.0),
+        ("mandelbox", mbox.clone(), mbox.camera.clone(), 4.0),
     ];
-    for (name, scene, cam) in cases {
+    for (name, scene, cam, half) in cases {
         // Octree voxels at most half a pixel; the tracer's hit threshold 0.3 pixel footprints
         // (a tracer "hit" is a ray passing within that distance of the surface).
-        let (iou, missed, hits) = silhouette(&scene, &cam, 160, 120, 0.5, 0.3);
+        let (iou, missed, hits) = silhouette(&scene, &cam, half, (160, 120), 0.5, 0.3);
         eprintln!("{name}: silhouette IoU {iou:.4}, tracer hits missed by the octree {missed}");
         assert!(iou >= 0.99, "{name}: IoU {iou}");
         assert!(
