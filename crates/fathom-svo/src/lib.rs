@@ -12,7 +12,8 @@
 //! - [`check`]: the link-integrity checker;
 //! - [`explorer`]: one frame = render (read-only) -> subdivide -> unify; stats;
 //! - [`zoom`]: camera paths (point-of-recursion zooms, the tour) and the precision guard;
-//! - [`scenes`]: code-built scenes used by the presets and tests.
+//! - [`scenes`]: code-built scenes used by the presets and tests;
+//! - [`stats`]: summaries of per-frame stats.
 
 // Loops over the three axes index several arrays at once.
 #![allow(clippy::needless_range_loop)]
@@ -24,6 +25,7 @@ pub mod generate;
 pub mod node;
 pub mod octree;
 pub mod scenes;
+pub mod stats;
 pub mod traverse;
 pub mod zoom;
 

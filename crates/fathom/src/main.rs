@@ -11,6 +11,7 @@ mod bench_eval;
 mod cmd_list;
 mod cmd_render;
 mod cmd_scene;
+mod cmd_zoom;
 
 /// Explore infinite 3D worlds built from distance fields: fractals, CSG trees folded into
 /// iterated function systems, rendered by sphere tracing.
@@ -36,6 +37,8 @@ enum Command {
     List(cmd_list::ListArgs),
     /// Print a preset (or a scene file, normalised) as scene-file text.
     Scene(cmd_scene::SceneArgs),
+    /// Explore with the sparse voxel octree along a zoom or tour; write frames and stats.
+    Zoom(cmd_zoom::ZoomArgs),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
 }
@@ -47,6 +50,7 @@ fn main() -> ExitCode {
         Some(Command::Render(a)) => cmd_render::run(a),
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
+        Some(Command::Zoom(a)) => cmd_zoom::run(a),
         Some(Command::Bench(a)) => bench::run(a),
     };
     match result {
