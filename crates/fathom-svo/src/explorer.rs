@@ -329,11 +329,7 @@ impl Explorer {
                     let mut c = [0u64; 3];
                     for x in 0..w as usize {
                         let d = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                        let ray = Ray {
-                            o,
-                            d: [d.x, d.y, d.z],
-                            lod,
-                        };
+                        let ray = Ray::new(o, [d.x, d.y, d.z], lod);
                         let hit = cast(tree, &ray, skip, trav, &mut reqs);
                         c[0] += 1;
                         c[2] += hit.steps as u64;

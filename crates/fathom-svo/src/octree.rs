@@ -62,8 +62,10 @@ impl BoxU {
     #[inline(always)]
     pub fn snapped(&self, d: u8) -> BoxU {
         let s = dim_at(d);
+        // Scaling by a power of two is exact, so this equals `(m / s).floor() * s`.
+        let inv = f64::from_bits((1023 + d as u64) << 52);
         BoxU {
-            min: self.min.map(|m| (m / s).floor() * s),
+            min: self.min.map(|m| (m * inv).floor() * s),
             depth: d,
         }
     }
@@ -91,15 +93,17 @@ impl BoxU {
     /// The same-size box across face `f`.
     #[inline(always)]
     pub fn across(&self, f: usize) -> BoxU {
-        let mut min = self.min;
         let a = f >> 1;
-        if f & 1 == 1 {
-            min[a] += self.dim();
-        } else {
-            min[a] -= self.dim();
-        }
+        let delta = if f & 1 == 1 { self.dim() } else { -self.dim() };
+        let c = |i: usize| {
+            if i == a {
+                self.min[i] + delta
+            } else {
+                self.min[i]
+            }
+        };
         BoxU {
-            min,
+            min: [c(0), c(1), c(2)],
             depth: self.depth,
         }
     }

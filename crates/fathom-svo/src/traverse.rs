@@ -34,6 +34,20 @@ pub struct Ray {
     pub d: [f64; 3],
     /// Implicit-LOD factor: a node is below the pixel footprint when `side < t * lod`.
     pub lod: f64,
+    /// `1 / d` per axis.
+    pub inv: [f64; 3],
+}
+
+impl Ray {
+    /// A ray from `o` along unit `d` with LOD factor `lod`.
+    pub fn new(o: [f64; 3], d: [f64; 3], lod: f64) -> Ray {
+        Ray {
+            o,
+            d,
+            lod,
+            inv: d.map(|x| 1.0 / x),
+        }
+    }
 }
 
 /// What a ray found.
@@ -135,20 +149,27 @@ fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
             continue;
         }
         let face = if da > 0.0 { b.min[a] + s } else { b.min[a] };
-        let ta = (face - r.o[a]) / da;
+        // Multiplying by the precomputed reciprocal: both traversals do the same, so their
+        // results stay identical.
+        let ta = (face - r.o[a]) * r.inv[a];
         if ta < best {
             best = ta;
             axis = a;
         }
     }
     let t = best.max(t);
-    let mut p = point(r, t);
     let pos = r.d[axis] > 0.0;
-    p[axis] = if pos {
+    let face = if pos {
         b.min[axis] + s
     } else {
         b.min[axis].next_down()
     };
+    // Built component by component (no indexed store into an array that is then read whole:
+    // that stalls store forwarding in this hot loop).
+    let c = |a: usize| {
+        if a == axis { face } else { r.o[a] + t * r.d[a] }
+    };
+    let p = [c(0), c(1), c(2)];
     (t, 2 * axis + pos as usize, p)
 }
 
@@ -264,7 +285,11 @@ pub fn cast_neighbour(tree: &Octree, r: &Ray, start: Start, reqs: &mut Vec<Reque
         } else {
             None
         };
-        b = b.across(f).snapped(nd);
+        b = if nd == b.depth {
+            b.across(f)
+        } else {
+            b.across(f).snapped(nd)
+        };
         id = nb;
         t = t1;
         p = p1;
