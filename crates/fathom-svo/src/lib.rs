@@ -10,6 +10,7 @@
 //! - [`traverse`]: neighbour traversal with skip node and link optimisation, kd-restart;
 //! - [`evict`]: bricks, visited flags, NRU unification with link repair;
 //! - [`check`]: the link-integrity checker;
+//! - [`outline`]: silhouette agreement with a sphere tracer, image similarity;
 //! - [`explorer`]: one frame = render (read-only) -> subdivide -> unify; stats;
 //! - [`zoom`]: camera paths (point-of-recursion zooms, the tour) and the precision guard;
 //! - [`scenes`]: code-built scenes used by the presets and tests;
@@ -24,6 +25,7 @@ pub mod explorer;
 pub mod generate;
 pub mod node;
 pub mod octree;
+pub mod outline;
 pub mod scenes;
 pub mod stats;
 pub mod traverse;

@@ -6,9 +6,8 @@ use crate::check::check;
 use crate::explorer::{Explorer, ExplorerConfig, SvoImage, Traversal};
 use crate::scenes;
 use crate::zoom;
-use fathom_core::eval::Evaluator;
+use fathom_core::Camera;
 use fathom_core::scene::Scene;
-use fathom_core::{Camera, Tape, V3};
 use glam::DVec3;
 
 fn cfg(w: u32, h: u32) -> ExplorerConfig {
@@ -64,36 +63,6 @@ fn neighbour_and_kdrestart_give_identical_images() {
     }
 }
 
-/// A plain f64 sphere tracer: hit when the distance drops below `eps` pixel footprints.
-fn trace_mask(scene: &Scene, cam: &Camera, w: u32, h: u32, eps: f64) -> Vec<bool> {
-    let tape = Tape::compile(scene).unwrap();
-    let f = cam.frame();
-    let pa = f.pixel_angle(h);
-    let mut ev = Evaluator::<f64>::new();
-    let mut out = Vec::with_capacity((w * h) as usize);
-    for y in 0..h {
-        for x in 0..w {
-            let d = f.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
-            let mut t = 0.0;
-            let mut hit = false;
-            for _ in 0..2000 {
-                let p = cam.eye + d * t;
-                let dist = ev.distance(&tape, V3::new(p.x, p.y, p.z));
-                if dist < eps * pa * t.max(1e-9) {
-                    hit = true;
-                    break;
-                }
-                t += dist;
-                if t > 20.0 {
-                    break;
-                }
-            }
-            out.push(hit);
-        }
-    }
-    out
-}
-
 /// (IoU, pixels the tracer hits that the octree misses, tracer hits).
 fn silhouette(
     scene: &Scene,
@@ -107,16 +76,9 @@ fn silhouette(
     c.fidelity = fid;
     c.root_min = DVec3::splat(-half);
     c.root_size = 2.0 * half;
-    let mut ex = Explorer::new(scene, c).unwrap();
-    let frames = ex.settle(cam, 100);
-    assert!(frames < 100, "the octree did not settle");
-    let svo = render_with(&mut ex, cam, Traversal::Neighbour).mask();
-    let st = trace_mask(scene, cam, w, h, eps);
-    let inter = svo.iter().zip(&st).filter(|(a, b)| **a && **b).count();
-    let union = svo.iter().zip(&st).filter(|(a, b)| **a || **b).count();
-    let missed = svo.iter().zip(&st).filter(|(a, b)| !**a && **b).count();
-    let hits = st.iter().filter(|&&h| h).count();
-    (inter as f64 / union.max(1) as f64, missed, hits)
+    let a = crate::outline::agreement(scene, cam, c, eps).unwrap();
+    assert!(a.settle_frames < 200, "the octree did not settle");
+    (a.iou, a.missed, a.tracer_hits)
 }
 
 #[test]

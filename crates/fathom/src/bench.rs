@@ -13,10 +13,13 @@ enum BenchKind {
     /// Tape evaluations per second per thread for each preset (f64 scalar, f32 packet), and
     /// tape compile time for a 100-node tree.
     Eval(crate::bench_eval::EvalArgs),
+    /// The sparse voxel octree explorer's evaluation: writes a markdown report with plots.
+    Svo(crate::bench_svo::SvoArgs),
 }
 
 pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
+        BenchKind::Svo(s) => crate::bench_svo::run(s),
     }
 }

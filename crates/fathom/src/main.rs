@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 mod bench;
 mod bench_eval;
+mod bench_svo;
 mod cmd_list;
 mod cmd_render;
 mod cmd_scene;
