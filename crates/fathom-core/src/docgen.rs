@@ -75,9 +75,14 @@ pub fn kind_name(kind: ParamKind) -> &'static str {
     }
 }
 
-/// One number as a scene file would show it (whole numbers without a fraction).
+/// One number as a scene file would show it (whole numbers without a fraction, exponents for
+/// very large or small magnitudes).
 pub fn fmt_value(x: f64) -> String {
-    fmt_num(x)
+    if x != 0.0 && x.abs() < 1e-3 {
+        format!("{x:e}")
+    } else {
+        fmt_num(x)
+    }
 }
 
 /// The default as written in a scene file: `1`, `(0, 1, 0)`.
@@ -103,6 +108,22 @@ pub fn fmt_range(spec: &ParamSpec) -> String {
 /// The first line of an entry's doc.
 pub fn first_line(doc: &str) -> &str {
     doc.lines().next().unwrap_or("").trim()
+}
+
+/// The first sentence of an entry's doc (up to the first `. `), for one-line listings.
+pub fn summary(doc: &str) -> String {
+    let p = paragraph(doc);
+    // The first `. ` outside inline code.
+    let mut in_code = false;
+    let bytes = p.as_bytes();
+    for (i, &b) in bytes.iter().enumerate() {
+        match b {
+            b'`' => in_code = !in_code,
+            b'.' if !in_code && bytes.get(i + 1) == Some(&b' ') => return p[..=i].to_string(),
+            _ => {}
+        }
+    }
+    p
 }
 
 /// The doc as one paragraph.
@@ -223,6 +244,16 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn summary_stops_at_the_first_sentence_outside_code() {
+        assert_eq!(summary("A b. C d."), "A b.");
+        assert_eq!(
+            summary("Keeps `n . p >= 0` and\nmore. Rest"),
+            "Keeps `n . p >= 0` and more."
+        );
+        assert_eq!(summary("No stop"), "No stop");
     }
 
     #[test]

@@ -13,6 +13,7 @@ pub mod combine;
 pub mod docgen;
 pub mod eval;
 pub mod fractals;
+pub mod frame;
 pub mod limits;
 pub mod modifiers;
 pub mod presets;

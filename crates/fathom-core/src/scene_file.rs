@@ -17,7 +17,8 @@ mod lex;
 /// Why a scene file could not be read or written.
 #[derive(Debug, Error)]
 pub enum SceneFileError {
-    /// The text is not a valid scene; `line`/`col` are 1-based (columns count characters).
+    /// The text is not a valid scene (bad syntax, or a rule broken at a place in the text);
+    /// `line`/`col` are 1-based (columns count characters).
     #[error("{origin}:{line}:{col}: {msg}")]
     Syntax {
         origin: String,
@@ -25,7 +26,8 @@ pub enum SceneFileError {
         col: usize,
         msg: String,
     },
-    /// The scene parsed but breaks a limit or rule (the message names the node path).
+    /// The scene parsed but breaks a limit or rule that has no single place in the text (the
+    /// tree is too deep, too many lights), or at a place left to its default.
     #[error("{origin}: {msg}")]
     Invalid { origin: String, msg: String },
     /// The file could not be read or written.
@@ -81,10 +83,16 @@ pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneFileError> {
         }
         syntax(pos, msg)
     })?;
-    scene.validate().map_err(|msg| SceneFileError::Invalid {
-        origin: origin.into(),
-        msg,
-    })?;
+    // Rule violations name a node path; point at it in the text when it is written there.
+    scene
+        .validate()
+        .map_err(|msg| match lex::locate_path(&tokens, &msg) {
+            Some(pos) => syntax(pos, msg),
+            None => SceneFileError::Invalid {
+                origin: origin.into(),
+                msg,
+            },
+        })?;
     Ok(scene)
 }
 

@@ -153,6 +153,21 @@ impl SvoImage {
         self.depth.iter().map(|d| d.is_finite()).collect()
     }
 
+    /// The shared frame type, so the post effects of the sphere tracer (fog, SSAO, tonemap)
+    /// and its output writers apply to octree renders too. Voxels carry no normal or id: the
+    /// normal is zero, the id 0 for hits.
+    pub fn to_frame(&self) -> fathom_core::frame::Frame {
+        let mut f = fathom_core::frame::Frame::new(self.width, self.height);
+        for (i, (&c, &d)) in self.colour.iter().zip(&self.depth).enumerate() {
+            f.colour[i] = std::array::from_fn(|k| ((c >> (8 * k)) & 255) as f32 / 255.0);
+            f.depth[i] = d;
+            if d.is_finite() {
+                f.id[i] = 0;
+            }
+        }
+        f
+    }
+
     /// 8-bit sRGB bytes (RGB), for PNG output.
     pub fn to_srgb8(&self) -> Vec<u8> {
         let mut out = Vec::with_capacity(self.colour.len() * 3);

@@ -15,11 +15,15 @@ enum BenchKind {
     Eval(crate::bench_eval::EvalArgs),
     /// The sparse voxel octree explorer's evaluation: writes a markdown report with plots.
     Svo(crate::bench_svo::SvoArgs),
+    /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
+    /// distance evaluations per pixel.
+    Trace(crate::bench_trace::TraceArgs),
 }
 
 pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
         BenchKind::Svo(s) => crate::bench_svo::run(s),
+        BenchKind::Trace(t) => crate::bench_trace::run(t),
     }
 }

@@ -62,6 +62,64 @@ pub struct ZoomArgs {
     /// Subdivision time per frame in ms.
     #[arg(long, default_value_t = 12.0)]
     pub subdivide_ms: f64,
+    /// Screen-space ambient occlusion strength applied to written frames (the sphere
+    /// tracer's post effect), [0, 4].
+    #[arg(long, default_value_t = 1.0)]
+    pub ssao: f32,
+}
+
+/// Which renderer `fathom render` uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RendererKind {
+    /// The CPU sphere tracer.
+    Trace,
+    /// The sparse voxel octree, subdivided until settled at the view.
+    Svo,
+}
+
+/// `fathom render --renderer svo`: settles an octree at the scene's camera (root cube
+/// [-4, 4]^3), renders it, applies the shared post effects (fog from the scene, `--ssao`) and
+/// writes the PNG (and the mask if asked).
+pub fn render_still(
+    scene: &fathom_core::Scene,
+    a: &crate::cmd_render::RenderArgs,
+) -> Result<(), String> {
+    let (width, height) = a.size;
+    let cfg = ExplorerConfig {
+        width,
+        height,
+        threads: a.threads.unwrap_or(2),
+        root_min: glam::DVec3::splat(-4.0),
+        root_size: 8.0,
+        ..ExplorerConfig::default()
+    };
+    let out = fathom_trace::output::open_output(&a.output)?;
+    let mut ex = Explorer::new(scene, cfg)?;
+    let frames = ex.settle(&scene.camera, 400);
+    let (img, reqs, counts) = ex.render(&scene.camera);
+    ex.release_requests(&reqs);
+    let mut frame = img.to_frame();
+    if scene.render.fog > 0.0 {
+        let sky = scene.render.sky_bottom.map(|c| c as f32);
+        fathom_trace::post::fog(&mut frame, scene.render.fog as f32, sky);
+    }
+    if a.ssao > 0.0 {
+        let pa = scene.camera.frame().pixel_angle(height) as f32;
+        fathom_trace::post::ssao(&mut frame, a.ssao, pa);
+    }
+    fathom_trace::output::save_colour(&frame, out, &a.output)?;
+    if let Some(p) = &a.mask {
+        let f = fathom_trace::output::open_output(p)?;
+        fathom_trace::output::save_mask(&frame, f, p)?;
+    }
+    if !a.quiet {
+        eprintln!(
+            "svo: settled in {frames} frames, {} nodes, {:.1} nodes per ray",
+            ex.tree.counts().nodes,
+            counts[2] as f64 / counts[0].max(1) as f64
+        );
+    }
+    Ok(())
 }
 
 /// Parses `WIDTHxHEIGHT`.
@@ -123,6 +181,9 @@ pub fn setup(a: &ZoomArgs) -> Result<(ZoomPreset, ExplorerConfig), String> {
             "--depth {} must be a finite zoom factor >= 1",
             a.depth
         ));
+    }
+    if !(a.ssao.is_finite() && (0.0..=4.0).contains(&a.ssao)) {
+        return Err(format!("--ssao {} is out of range [0, 4]", a.ssao));
     }
     if a.frames == 0 || a.frames > 10_000_000 {
         return Err(format!(
@@ -263,6 +324,7 @@ mod tests {
             fidelity: 1.0,
             max_memory: "64M".into(),
             subdivide_ms: 5.0,
+            ssao: 1.0,
         }
     }
 
@@ -291,5 +353,48 @@ mod tests {
         let msg = r.stopped.expect("the zoom should have stopped");
         assert!(msg.contains("precision limit"), "{msg}");
         assert!(r.frames.len() < 40 && r.frames.len() > 10);
+    }
+}
+
+#[cfg(test)]
+mod render_tests {
+    use crate::cmd_render::RenderArgs;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        r: RenderArgs,
+    }
+
+    #[test]
+    fn render_with_the_octree_writes_a_png_with_a_silhouette() {
+        let dir = std::env::temp_dir().join(format!("fathom-svo-still-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let out = dir.join("s.png");
+        let cli = Cli::parse_from([
+            "t",
+            "--preset",
+            "mandelbulb",
+            "--renderer",
+            "svo",
+            "--size",
+            "64x48",
+            "--threads",
+            "1",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        crate::cmd_render::run(cli.r).unwrap();
+        let img = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (64, 48));
+        let centre = img.get_pixel(32, 24).0;
+        let corner = img.get_pixel(0, 0).0;
+        assert_ne!(
+            centre, corner,
+            "the bulb should cover the centre, not the corner"
+        );
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -9,6 +9,7 @@ use std::process::ExitCode;
 mod bench;
 mod bench_eval;
 mod bench_svo;
+mod bench_trace;
 mod cmd_list;
 mod cmd_render;
 mod cmd_scene;
@@ -33,7 +34,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene file or preset to an image.
-    Render(cmd_render::RenderArgs),
+    Render(Box<cmd_render::RenderArgs>),
     /// List presets, primitives, operators or fractals with their parameters.
     List(cmd_list::ListArgs),
     /// Print a preset (or a scene file, normalised) as scene-file text.
@@ -48,7 +49,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         None => cmd_render::run_default(),
-        Some(Command::Render(a)) => cmd_render::run(a),
+        Some(Command::Render(a)) => cmd_render::run(*a),
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
         Some(Command::Zoom(a)) => cmd_zoom::run(a),

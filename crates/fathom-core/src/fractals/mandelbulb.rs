@@ -101,7 +101,8 @@ fn iterate<S: Real>(
         active = active & r.lt(bailout);
     }
     let d = S::splat(0.5) * r.max(S::splat(1e-30)).ln() * r / dr;
-    (d, trap)
+    // A lane that never escaped is inside (at this depth): the formula means nothing there.
+    (S::select(active, S::zero(), d), trap)
 }
 
 /// Test access to the two kernels, to check that they agree.

@@ -38,26 +38,40 @@ crate::declare_family! {
     fn estimate(p: V3<S>) -> (S, S);
 
     /// The Mandelbulb (White and Nylander), classic acos/atan2 spherical form, with the
-    /// running-derivative distance estimate `0.5 ln(r) r / dr`. At `power = 8` an exact
-    /// trig-free form (repeated complex squaring) is used instead; it is the same map.
-    Mandelbulb [Bound] (
+    /// running-derivative distance estimate `0.5 ln(r) r / dr` times `safety`; a point that
+    /// never escapes counts as inside (estimate 0). At `power = 8` an exact trig-free form
+    /// (repeated complex squaring) is used instead; it is the same map.
+    /// Not a strict bound: on random pairs `|f(a) - f(b)| / |a - b|` is heavy-tailed (about
+    /// 1.4e-4 of pairs exceed 1 at safety 1, the worst seen grows with the sample: 13 in
+    /// 600 000 pairs); the default `safety` 0.8 brings the exceeding fraction near 1e-4.
+    Mandelbulb [Safety] (
         power: Scalar = 8.0, [2.0, 32.0], "exponent of the spherical power map",
         iterations: Int = 12.0, [1.0, 1000.0], "maximum iterations",
-        bailout: Scalar = 2.0, [1.0, 1e3], "escape radius",
-    ) => mandelbulb::mandelbulb(p, power, iterations, bailout);
+        bailout: Scalar = 4.0, [1.0, 1e3], "escape radius (below 4 the estimate degrades)",
+        safety: Scalar = 0.8, [0.01, 1.0], "factor on the estimate (smaller: safer, slower)",
+    ) => {
+        let (d, trap) = mandelbulb::mandelbulb(p, power, iterations, bailout);
+        (d * safety, trap)
+    };
 
     /// The Mandelbox (Tglad): per iteration a box fold (reflect each coordinate beyond
     /// `folding_limit`), a sphere fold (inversion between `min_radius` and `fixed_radius`), then
-    /// `z = scale z + p`, tracking the running derivative; estimate `|z| / |dr|`.
+    /// `z = scale z + p`, tracking the running derivative; estimate `safety |z| / |dr|`.
     /// The default scale -1.5 fits inside `|x|, |y|, |z| < 2.2`.
-    Mandelbox [Bound] (
+    /// Not a strict bound: `|z| / dr` overestimates by up to ~2.6x (worst of 600 000 random
+    /// pairs); about 4e-3 of pairs exceed ratio 1 at safety 1, 2e-4 exceed 1/0.6.
+    Mandelbox [Safety] (
         scale: Scalar = -1.5, [-4.0, 4.0], "scale of each iteration (classic: 2 or -1.5)",
         min_radius: Scalar = 0.5, [0.0, 4.0], "inner radius of the sphere fold",
         fixed_radius: Scalar = 1.0, [0.01, 4.0], "outer radius of the sphere fold",
         folding_limit: Scalar = 1.0, [0.0, 4.0], "half-width of the box fold",
         iterations: Int = 12.0, [1.0, 1000.0], "maximum iterations",
-        bailout: Scalar = 100.0, [2.0, 1e4], "escape radius",
-    ) => mandelbox::mandelbox(p, scale, min_radius, fixed_radius, folding_limit, iterations, bailout);
+        bailout: Scalar = 1000.0, [2.0, 1e6], "escape radius",
+        safety: Scalar = 0.6, [0.01, 1.0], "factor on the estimate (smaller: safer, slower)",
+    ) => {
+        let (d, trap) = mandelbox::mandelbox(p, scale, min_radius, fixed_radius, folding_limit, iterations, bailout);
+        (d * safety, trap)
+    };
 
     /// The Menger sponge of the cube `[-1, 1]^3` as a kaleidoscopic IFS (Knighty, as in
     /// Fragmentarium): abs and sort folds, scale about `offset`, the middle cut along z; the
@@ -80,8 +94,9 @@ crate::declare_family! {
     /// The Koch snowflake as a wire: three Koch curves on an equilateral triangle (circumradius
     /// 2/sqrt 3, in the xy plane), folded onto one curve, which is folded onto its right quarter
     /// each generation (mirror in x, then the 60-degree mirror through (1/3, 0)); `twist` turns
-    /// each generation about its own axis, making a space curve. The estimate is the exact
-    /// distance to the depth-n polyline minus a tube radius of `thickness` finest segments.
+    /// each generation about its own axis, making a space curve. The estimate is the distance to
+    /// the depth-n polyline (exact at twist 0) minus a tube radius of `thickness` finest
+    /// half-segments.
     Koch [Bound] (
         iterations: Int = 5.0, [0.0, 1000.0], "generations of the curve",
         twist: Scalar = 0.0, [-360.0, 360.0], "degrees each generation turns about its axis (0: planar)",

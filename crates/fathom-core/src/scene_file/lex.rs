@@ -309,3 +309,130 @@ mod tests {
         assert_eq!(top_level_number(&t, "version"), Some(((1, 40), "3".into())));
     }
 }
+
+/// One step of a node path as `Scene::validate` writes it (`root.children[2].material`).
+enum Seg<'a> {
+    Field(&'a str),
+    Index(usize),
+}
+
+/// Splits the path at the start of `msg` (up to the first character that cannot be part of a
+/// path) into segments; `None` when the message does not start with a path.
+fn path_segments(msg: &str) -> Option<Vec<Seg<'_>>> {
+    let end = msg
+        .find(|c: char| !(c.is_ascii_alphanumeric() || "_.[]".contains(c)))
+        .unwrap_or(msg.len());
+    let path = &msg[..end];
+    let mut segs = Vec::new();
+    for part in path.split('.') {
+        let (name, rest) = part.split_at(part.find('[').unwrap_or(part.len()));
+        if name.is_empty() || !name.starts_with(|c: char| c.is_ascii_lowercase()) {
+            return None;
+        }
+        segs.push(Seg::Field(name));
+        for idx in rest.split('[').skip(1) {
+            segs.push(Seg::Index(idx.strip_suffix(']')?.parse().ok()?));
+        }
+    }
+    (!segs.is_empty()).then_some(segs)
+}
+
+/// Steps into a value starting at token `k` at depth `d`: past a name and opening parentheses
+/// (`Node(`, `Some((`), or one opening `[`. Returns the first token inside and its depth.
+fn descend(tokens: &[Token], mut k: usize, mut d: usize) -> (usize, usize) {
+    while let Some(t) = tokens.get(k) {
+        match t.kind {
+            Kind::Punct('(') => {
+                d += 1;
+                k += 1;
+            }
+            // A struct name or `Some`, not a field name inside the struct.
+            Kind::Ident(_) if tokens.get(k + 1).map(|n| &n.kind) == Some(&Kind::Punct('(')) => {
+                k += 1;
+            }
+            Kind::Punct('[') => return (k + 1, d + 1),
+            _ => break,
+        }
+    }
+    (k, d)
+}
+
+/// The position of the text a validation message's leading path names (`root.children[0]
+/// .material: ...` points at that `material` field), as near as the text allows; `None` when
+/// the message has no path or the scene is not a bracketed structure.
+pub fn locate_path(tokens: &[Token], msg: &str) -> Option<(usize, usize)> {
+    let segs = path_segments(msg)?;
+    let open = tokens
+        .iter()
+        .position(|t| t.kind == Kind::Punct('(') && t.depth == 0)?;
+    let (mut i, mut d) = (open + 1, 1);
+    let mut pos = None;
+    for seg in segs {
+        match seg {
+            Seg::Field(name) => {
+                let mut j = i;
+                loop {
+                    let t = tokens.get(j)?;
+                    if t.depth < d {
+                        return pos; // not written out (a default): the nearest enclosing place
+                    }
+                    let is_field = t.depth == d
+                        && t.kind == Kind::Ident(name.to_string())
+                        && tokens.get(j + 1).map(|n| &n.kind) == Some(&Kind::Punct(':'));
+                    if is_field {
+                        break;
+                    }
+                    j += 1;
+                }
+                pos = Some(tokens[j].pos);
+                (i, d) = descend(tokens, j + 2, d);
+            }
+            Seg::Index(n) => {
+                let mut j = i;
+                let mut seen = 0;
+                while seen < n {
+                    let t = tokens.get(j)?;
+                    if t.depth < d {
+                        return pos;
+                    }
+                    if t.depth == d && t.kind == Kind::Punct(',') {
+                        seen += 1;
+                    }
+                    j += 1;
+                }
+                let t = tokens.get(j).filter(|t| t.depth >= d)?;
+                pos = Some(t.pos);
+                (i, d) = descend(tokens, j, d);
+            }
+        }
+    }
+    pos
+}
+
+#[cfg(test)]
+mod locate_tests {
+    use super::*;
+
+    #[test]
+    fn paths_resolve_to_their_fields() {
+        let text = "Scene(version: 1,\n root: Node(shape: Sphere, children: [\n  Node(shape: Box),\n  Node(shape: Box, material: Material(specular: 3)),\n ]),\n ifs: Some((iterations: 2, ops: [FoldAbs, Rotate(angle: 1)])),\n camera: (fov: 0))";
+        let t = scan(text).unwrap();
+        assert_eq!(
+            locate_path(&t, "root.children[1].material: bad"),
+            Some((4, 20))
+        );
+        assert_eq!(locate_path(&t, "root.children[0]: bad"), Some((3, 3)));
+        assert_eq!(locate_path(&t, "ifs.ops[1]: bad"), Some((6, 43)));
+        assert_eq!(
+            locate_path(&t, "camera.fov = 0 is out of range"),
+            Some((7, 11))
+        );
+        // A default (not written) points at the nearest enclosing field.
+        assert_eq!(
+            locate_path(&t, "root.children[0].material: x"),
+            Some((3, 3))
+        );
+        assert_eq!(locate_path(&t, "the tree is 40 levels deep"), None);
+        assert_eq!(locate_path(&t, "9 lights; the limit is 8"), None);
+    }
+}

@@ -173,7 +173,17 @@ fn invalid_scenes_name_the_node_path() {
         "shape: Sphere, children: [Node(shape: Sphere, material: Material(specular: 3.0))],",
     );
     let e = parse(&text, "t.ron").unwrap_err().to_string();
-    assert!(e.starts_with("t.ron: root.children[0].material"), "{e}");
+    assert!(
+        e.starts_with("t.ron:4:55: root.children[0].material"),
+        "{e}"
+    );
+    // Rules with no place in the text keep the file name only.
+    let lights = BASE.replace(
+        "version: 1,",
+        &format!("version: 1, lights: [{}],", "Light(),".repeat(9)),
+    );
+    let e = parse(&lights, "t.ron").unwrap_err().to_string();
+    assert!(e.starts_with("t.ron: 9 lights; the limit is 8"), "{e}");
 }
 
 #[test]
@@ -233,4 +243,15 @@ fn load_and_save_round_trip_through_a_file() {
     let missing = load(&dir.join("missing.ron")).unwrap_err();
     assert!(matches!(missing, SceneFileError::Io { .. }));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_worked_example_in_the_format_guide_parses_and_compiles() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/scene-format.md");
+    let md = std::fs::read_to_string(&path).unwrap();
+    let start = md.find("```ron\n").expect("a ron block") + "```ron\n".len();
+    let end = start + md[start..].find("```").unwrap();
+    let scene = parse(&md[start..end], "scene-format.md").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.root.children.len(), 2);
+    crate::tape::Tape::compile(&scene).unwrap();
 }

@@ -1,0 +1,64 @@
+//! Writing a [`Frame`] to files: the tonemapped PNG, the hit mask, the depth map (EXR) and the
+//! heat map of steps per pixel.
+
+use crate::post;
+use fathom_core::frame::Frame;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+/// Opens `path` for writing now, so an unwritable path fails before any rendering.
+pub fn open_output(path: &Path) -> Result<File, String> {
+    File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+fn write_png(file: File, path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), String> {
+    use image::ImageEncoder;
+    let enc = image::codecs::png::PngEncoder::new(BufWriter::new(file));
+    enc.write_image(rgb, w, h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// The tonemapped, gamma-encoded colour image as PNG.
+pub fn save_colour(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
+    write_png(file, path, frame.width, frame.height, &post::to_rgb8(frame))
+}
+
+/// White where the primary ray hit, black elsewhere (PNG).
+pub fn save_mask(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
+    let rgb: Vec<u8> = (0..frame.len())
+        .flat_map(|i| [if frame.is_hit(i) { 255 } else { 0 }; 3])
+        .collect();
+    write_png(file, path, frame.width, frame.height, &rgb)
+}
+
+/// Heat map of distance evaluations per pixel (black, red, yellow, white up to the frame's
+/// maximum), PNG.
+pub fn save_steps(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
+    let max = frame.steps.iter().copied().max().unwrap_or(0).max(1) as f32;
+    let rgb: Vec<u8> = frame
+        .steps
+        .iter()
+        .flat_map(|&s| {
+            let v = s as f32 / max * 3.0;
+            [v, v - 1.0, v - 2.0].map(|c| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)
+        })
+        .collect();
+    write_png(file, path, frame.width, frame.height, &rgb)
+}
+
+/// Ray distance per pixel as a float EXR (all three channels equal); misses are written as
+/// `far` (the scene's maximum distance) so no infinity reaches the file.
+pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<(), String> {
+    let data: Vec<f32> = frame
+        .depth
+        .iter()
+        .flat_map(|&d| [if d.is_finite() { d } else { far }; 3])
+        .collect();
+    let img = image::Rgb32FImage::from_raw(frame.width, frame.height, data)
+        .ok_or("depth buffer has the wrong size")?;
+    let mut w = BufWriter::new(file);
+    image::DynamicImage::ImageRgb32F(img)
+        .write_to(&mut w, image::ImageFormat::OpenExr)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+}

@@ -1,0 +1,147 @@
+//! Multi-resolution cone-marching depth prepass.
+//!
+//! Level by level (blocks of 8, 4, then 2 pixels), one cone per block is marched from the eye.
+//! A cone's radius at distance `t` is `t * slope`, with the slope covering the half-diagonal of
+//! its block (`0.75 * block * pixel_angle`, where `pixel_angle` is the angular size of the
+//! largest pixel, the one at the image centre). The cone steps by `d - t * slope`: by the
+//! triangle inequality every ray inside the cone is then outside the surface up to where the
+//! cone stops, so that distance is a safe start for every ray in the block. Each finer level
+//! (and finally each pixel) starts at the minimum over the 2x2 nearest coarser cells, which also
+//! absorbs small errors of distance estimates that are not strict bounds.
+
+use crate::tracer::{MarchParams, march};
+use fathom_core::real::Real;
+use fathom_core::{CameraFrame, Evaluator, Tape, V3};
+use rayon::prelude::*;
+
+/// Block sizes of the prepass levels, coarsest first.
+pub const LEVELS: [u32; 3] = [8, 4, 2];
+
+/// Safe start distances for one level: one per `block` x `block` cell of the image.
+#[derive(Clone, Debug)]
+pub struct StartGrid {
+    /// Cell size in pixels.
+    pub block: u32,
+    /// Cells per row and per column.
+    pub w: u32,
+    pub h: u32,
+    /// Safe start distance per cell, row-major.
+    pub t: Vec<f32>,
+}
+
+impl StartGrid {
+    /// A grid of one cell whose start is `t` everywhere (no prepass).
+    pub fn uniform(t: f32) -> Self {
+        StartGrid {
+            block: u32::MAX,
+            w: 1,
+            h: 1,
+            t: vec![t],
+        }
+    }
+
+    /// Safe start for the point at pixel coordinates (`px`, `py`) (pixel centres at +0.5): the
+    /// minimum over the 2x2 cells whose centres surround it.
+    pub fn start_at(&self, px: f64, py: f64) -> f32 {
+        if self.block == u32::MAX {
+            return self.t[0];
+        }
+        let b = self.block as f64;
+        let fx = (px / b - 0.5).floor() as i64;
+        let fy = (py / b - 0.5).floor() as i64;
+        let mut m = f32::INFINITY;
+        for dy in 0..2 {
+            for dx in 0..2 {
+                let x = (fx + dx).clamp(0, self.w as i64 - 1) as usize;
+                let y = (fy + dy).clamp(0, self.h as i64 - 1) as usize;
+                m = m.min(self.t[y * self.w as usize + x]);
+            }
+        }
+        m
+    }
+}
+
+/// What the prepass needs to know about the view.
+pub struct View<'a> {
+    pub tape: &'a Tape,
+    pub cam: &'a CameraFrame,
+    pub width: u32,
+    pub height: u32,
+    pub pixel_angle: f64,
+    /// Parameters of the primary rays (t_max, steps, pixel epsilon).
+    pub base: MarchParams,
+    /// Where every ray may start (the distance bound at the eye).
+    pub t_start: f32,
+}
+
+/// Runs every level; returns the finest grid and the distance evaluations spent.
+pub fn run<S: Real>(view: &View) -> (StartGrid, u64) {
+    let mut grid = StartGrid::uniform(view.t_start);
+    let mut evals = 0u64;
+    for &block in &LEVELS {
+        let (g, e) = level::<S>(view, block, &grid);
+        grid = g;
+        evals += e;
+    }
+    (grid, evals)
+}
+
+fn level<S: Real>(view: &View, block: u32, coarser: &StartGrid) -> (StartGrid, u64) {
+    let w = view.width.div_ceil(block);
+    let h = view.height.div_ceil(block);
+    let n = w as usize * h as usize;
+    let slope = 0.75 * block as f64 * view.pixel_angle;
+    let params = MarchParams {
+        cone_slope: slope,
+        // Stop once the cone has closed in to within a quarter of its radius: creeping further
+        // costs many steps for little.
+        eps_slope: 0.25 * slope + view.base.eps_slope,
+        omega: 1.0,
+        ..view.base
+    };
+    let mut t = vec![0f32; n];
+    let chunk = S::LANES * 16;
+    let evals: u64 = t
+        .par_chunks_mut(chunk)
+        .enumerate()
+        .map_init(Evaluator::<S>::new, |ev, (ci, out)| {
+            let mut evals = 0u64;
+            for (pi, lanes) in out.chunks_mut(S::LANES).enumerate() {
+                let first = ci * chunk + pi * S::LANES;
+                let mut dx = [0f64; 8];
+                let mut dy = [0f64; 8];
+                let mut dz = [0f64; 8];
+                let mut t0 = [0f64; 8];
+                let mut live = [0f64; 8];
+                for l in 0..S::LANES {
+                    let k = (first + l.min(lanes.len() - 1)) as u32;
+                    let (cx, cy) = (k % w, k / w);
+                    let px = ((cx * block) as f64 + 0.5 * block as f64).min(view.width as f64);
+                    let py = ((cy * block) as f64 + 0.5 * block as f64).min(view.height as f64);
+                    let d = view.cam.ray_dir(px, py, view.width, view.height);
+                    (dx[l], dy[l], dz[l]) = (d.x, d.y, d.z);
+                    t0[l] = coarser.start_at(px, py) as f64;
+                    live[l] = if l < lanes.len() { 0.0 } else { 1.0 };
+                }
+                let dir = V3::new(
+                    S::from_lanes(&dx[..S::LANES]),
+                    S::from_lanes(&dy[..S::LANES]),
+                    S::from_lanes(&dz[..S::LANES]),
+                );
+                let e = view.cam.eye;
+                let origin = V3::new(S::splat(e.x), S::splat(e.y), S::splat(e.z));
+                let live = S::from_lanes(&live[..S::LANES]).lt(S::splat(0.5));
+                let t0 = S::from_lanes(&t0[..S::LANES]);
+                let m = march(ev, view.tape, origin, dir, t0, live, &params);
+                for (l, o) in lanes.iter_mut().enumerate() {
+                    // A small pull-back keeps the next level clear of the surface the cone
+                    // touched.
+                    *o = (m.t.lane(l) * (1.0 - 1e-3)) as f32;
+                    evals += m.steps.lane(l) as u64;
+                }
+            }
+            evals
+        })
+        .sum();
+    (StartGrid { block, w, h, t }, evals)
+}
