@@ -319,12 +319,33 @@ impl Explorer {
         self.skip = tree.locate(o);
     }
 
+    /// The eye never sits inside the surface, but it can sit inside a coarse full voxel that
+    /// the zoom has not refined yet: every ray would then stop at distance 0, nothing else
+    /// would be visited, and unification would unload the whole view. Subdivide the eye's
+    /// leaf (synchronously, it is one leaf per level) until it is empty or at the depth limit.
+    fn clear_eye(&mut self, o: [f64; 3]) {
+        let mut ev = Evaluator::<f64>::new();
+        while let Some((id, b)) = self.skip {
+            let n = &self.tree.nodes[id as usize];
+            if n.is_empty() || !n.is_leaf() || b.depth >= crate::octree::MAX_DEPTH {
+                return;
+            }
+            let r = eval_children(&self.shader, &self.tree, &mut ev, id, b);
+            if apply(&mut self.tree, &r) == Outcome::NoMemory {
+                return;
+            }
+            self.tree.commit_frees();
+            self.skip = self.tree.locate(o);
+        }
+    }
+
     /// Phase 1: renders the tree as it is (read-only apart from atomics). Returns the image,
     /// the subdivision requests and (rays, hits, node steps).
     pub fn render(&mut self, cam: &Camera) -> (SvoImage, Vec<Request>, [u64; 3]) {
         let frame = cam.frame();
         let o = self.tree.to_u(cam.eye);
         self.update_skip(o);
+        self.clear_eye(o);
         let (w, h) = (self.cfg.width, self.cfg.height);
         let lod = frame.pixel_angle(h) * self.cfg.fidelity;
         let mut colour = vec![0u32; (w * h) as usize];

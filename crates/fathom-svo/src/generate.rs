@@ -212,6 +212,35 @@ pub fn apply(tree: &mut Octree, r: &Children) -> Outcome {
             count += 1;
         }
     }
+    // Refine the copied outer links: descend from the parent's neighbour towards each child's
+    // adjacent box, as deep as the child (safe here: nothing else runs during link-in).
+    // Without this, chains of full leaves subdivided level after level hand their children
+    // links many levels too coarse, and every first crossing pays a long descent.
+    for o in 0..8u32 {
+        let cb = r.b.child(o as usize);
+        for a in 0..3 {
+            let outer = if o >> a & 1 == 1 { 2 * a + 1 } else { 2 * a };
+            let l = parent_links[outer];
+            if l == NONE {
+                continue;
+            }
+            let target = cb.across(outer);
+            let mut m = l;
+            let mut mb = target.snapped(tree.nodes[m as usize].depth);
+            while mb.depth < cb.depth {
+                let mn = &tree.nodes[m as usize];
+                if mn.is_leaf() {
+                    break;
+                }
+                let oc = mb.octant_of(target.min);
+                m = mn.children + oc as u32;
+                mb = mb.child(oc);
+            }
+            if m != l {
+                tree.nodes[(first + o) as usize].set_link(outer, m);
+            }
+        }
+    }
     let n = &mut tree.nodes[id as usize];
     n.children = first;
     n.colour = sum
