@@ -93,6 +93,9 @@ pub struct RenderArgs {
     /// Distance between the eyes for --stereo, in scene units.
     #[arg(long, default_value_t = 0.065)]
     pub eye_separation: f64,
+    /// Renderer: the sphere tracer, or the sparse voxel octree (settled at this view).
+    #[arg(long, value_enum, default_value = "trace")]
+    pub renderer: crate::cmd_zoom::RendererKind,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -195,6 +198,9 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     }
     crate::render_gpu::check(a.gpu, a.stereo, a.eye_separation)?;
     let scene = load_scene(&a)?;
+    if a.renderer == crate::cmd_zoom::RendererKind::Svo {
+        return crate::cmd_zoom::render_still(&scene, &a);
+    }
     // Open every output before rendering, so a bad path fails fast.
     let out = output::open_output(&a.output)?;
     let mask = open(&a.mask)?;
@@ -287,6 +293,7 @@ pub fn run_default() -> Result<(), String> {
         gpu: false,
         stereo: None,
         eye_separation: 0.065,
+        renderer: crate::cmd_zoom::RendererKind::Trace,
     };
     run(a)?;
     let shown = std::fs::canonicalize("fathom.png").unwrap_or("fathom.png".into());
@@ -336,6 +343,7 @@ mod tests {
             gpu: false,
             stereo: None,
             eye_separation: 0.065,
+            renderer: crate::cmd_zoom::RendererKind::Trace,
         }
     }
 

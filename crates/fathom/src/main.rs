@@ -9,10 +9,12 @@ use std::process::ExitCode;
 mod bench;
 mod bench_eval;
 mod bench_gpu;
+mod bench_svo;
 mod bench_trace;
 mod cmd_list;
 mod cmd_render;
 mod cmd_scene;
+mod cmd_zoom;
 mod render_gpu;
 
 /// Explore infinite 3D worlds built from distance fields: fractals, CSG trees folded into
@@ -39,6 +41,8 @@ enum Command {
     List(cmd_list::ListArgs),
     /// Print a preset (or a scene file, normalised) as scene-file text.
     Scene(cmd_scene::SceneArgs),
+    /// Explore with the sparse voxel octree along a zoom or tour; write frames and stats.
+    Zoom(cmd_zoom::ZoomArgs),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
 }
@@ -50,6 +54,7 @@ fn main() -> ExitCode {
         Some(Command::Render(a)) => cmd_render::run(*a),
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
+        Some(Command::Zoom(a)) => cmd_zoom::run(a),
         Some(Command::Bench(a)) => bench::run(a),
     };
     match result {

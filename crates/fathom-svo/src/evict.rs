@@ -1,0 +1,134 @@
+//! Bounded memory: bricks, visited flags and the not-recently-used unification.
+//!
+//! A brick is the subtree under a node whose depth is a multiple of the brick period `k`, so
+//! bricks keep being created as the zoom deepens and the smallest ones never hold more than
+//! `8^k` nodes. Every node names its brick representative; a ray marks the bricks of the
+//! leaves it passes through (walking up the chain of enclosing bricks until one is already
+//! marked). Every few frames, [`unify`] turns each unvisited brick into a single full leaf
+//! holding its average colour, frees its nodes, and repairs the neighbour links that pointed
+//! into them: those can only come from smaller nodes touching the brick's faces, so a walk
+//! over the six face-adjacent regions finds them all. Freed child blocks go to the arena's
+//! free list.
+
+use crate::node::{EMPTY, FREE, NONE, VISITED, opposite};
+use crate::octree::{BoxU, Octree};
+
+/// Marks the bricks enclosing node `id` as visited (rays call this; atomics, no locks).
+#[inline]
+pub fn mark_visited(tree: &Octree, id: u32) {
+    let nodes = &tree.nodes;
+    let mut b = nodes[id as usize].brick;
+    while b != NONE {
+        let n = &nodes[b as usize];
+        if n.flags() & VISITED != 0 {
+            break;
+        }
+        n.set_flags(VISITED);
+        let p = n.parent;
+        if p == NONE {
+            break;
+        }
+        b = nodes[p as usize].brick;
+    }
+}
+
+/// Frees every descendant of `r` (box `rb`), repairing links into them so they point at `r`;
+/// `r` becomes a leaf (its flags are left for the caller to set).
+pub fn free_children(tree: &mut Octree, r: u32, rb: BoxU) {
+    let first = tree.nodes[r as usize].children;
+    if first == NONE {
+        return;
+    }
+    // 1. Collect the blocks of the subtree and mark their slots free.
+    let mut blocks = Vec::new();
+    let mut stack = vec![r];
+    while let Some(x) = stack.pop() {
+        let c = tree.nodes[x as usize].children;
+        if c == NONE {
+            continue;
+        }
+        tree.note_inner(x, false);
+        blocks.push(c);
+        for i in c..c + 8 {
+            tree.nodes[i as usize].set_flags(FREE);
+            stack.push(i);
+        }
+    }
+    tree.nodes[r as usize].children = NONE;
+    // 2. Repair links from outside that pointed into the freed nodes.
+    let rdepth = rb.depth;
+    for g in 0..6 {
+        let start = tree.nodes[r as usize].link(g);
+        if start == NONE {
+            continue;
+        }
+        let a = rb.across(g);
+        let axis = g >> 1;
+        let sb = a.snapped(tree.nodes[start as usize].depth);
+        let mut st = vec![(start, sb)];
+        while let Some((y, yb)) = st.pop() {
+            let n = &tree.nodes[y as usize];
+            if yb.depth > rdepth {
+                let l = n.link(opposite(g));
+                if l != NONE && tree.nodes[l as usize].is_free() {
+                    n.set_link(opposite(g), r);
+                }
+            }
+            if n.children == NONE {
+                continue;
+            }
+            for o in 0..8 {
+                let cb = yb.child(o);
+                let cd = cb.dim();
+                let touches = if g & 1 == 1 {
+                    cb.min[axis] == a.min[axis]
+                } else {
+                    cb.min[axis] + cd == rb.min[axis]
+                };
+                let overlaps = (0..3)
+                    .filter(|&b| b != axis)
+                    .all(|b| cb.min[b] < a.min[b] + a.dim() && cb.min[b] + cd > a.min[b]);
+                if touches && overlaps {
+                    st.push((n.children + o as u32, cb));
+                }
+            }
+        }
+    }
+    // 3. Hand the blocks back (reused after this phase).
+    for b in blocks {
+        tree.release_block(b);
+    }
+}
+
+/// Unloads every brick not visited since the last call (except those shallower than
+/// `keep_levels`): each becomes one full leaf with its average colour. Clears the visited
+/// flags of the bricks kept. Returns how many bricks were unified.
+pub fn unify(tree: &mut Octree, keep_levels: u8) -> usize {
+    let mut unified = 0;
+    let mut stack = vec![(0u32, BoxU::ROOT)];
+    while let Some((x, xb)) = stack.pop() {
+        let (first, flags) = {
+            let n = &tree.nodes[x as usize];
+            (n.children, n.flags())
+        };
+        if first == NONE {
+            continue;
+        }
+        if tree.is_brick_depth(xb.depth) {
+            if xb.depth >= keep_levels && flags & VISITED == 0 {
+                free_children(tree, x, xb);
+                tree.nodes[x as usize].clear_flags(EMPTY);
+                unified += 1;
+                continue;
+            }
+            tree.nodes[x as usize].clear_flags(VISITED);
+        }
+        for o in 0..8 {
+            if tree.nodes[(first + o) as usize].children != NONE {
+                stack.push((first + o, xb.child(o as usize)));
+            }
+        }
+    }
+    tree.commit_frees();
+    unified
+}

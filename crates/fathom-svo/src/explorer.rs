@@ -1,0 +1,548 @@
+//! The explorer: one octree, one scene, one camera, advanced a frame at a time.
+//!
+//! A frame has three phases, so no frame ever sees a half-updated octree (no torn frames by
+//! construction) while both cores stay busy in each phase:
+//! 1. **render** (parallel over rows, the tree shared read-only; rays only write neighbour-link
+//!    improvements, visited flags and subdivision requests, all atomics that never change what
+//!    a ray sees);
+//! 2. **subdivide** (the requested leaves, largest first, their 8 children evaluated in
+//!    parallel within a time budget, then linked in on one thread; all-empty children recombine
+//!    upward);
+//! 3. **unify** (every few frames, or when memory runs short: unload bricks no ray visited).
+//!
+//! The skip node (the leaf containing the eye) is updated before rendering by following the
+//! neighbour link through the face the eye crossed, or one descent from the root.
+
+use crate::evict::unify;
+use crate::generate::{Children, Outcome, Shader, apply, eval_children, init_root};
+use crate::node::{NONE, REQUESTED, pack_rgb};
+use crate::octree::{BoxU, Octree};
+use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
+use fathom_core::eval::Evaluator;
+use fathom_core::scene::Scene;
+use fathom_core::{Camera, CameraFrame};
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Which traversal renders the frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Traversal {
+    /// Neighbour links from the skip node (scale independent).
+    Neighbour,
+    /// Descent from the root for every leaf (the baseline).
+    KdRestart,
+}
+
+/// Settings of an explorer. [`ExplorerConfig::validate`] gives the user-facing errors.
+#[derive(Clone, Debug)]
+pub struct ExplorerConfig {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Voxels may project to up to this many pixels, [0.25, 16].
+    pub fidelity: f64,
+    /// Worker threads.
+    pub threads: usize,
+    /// Bricks every this many levels.
+    pub brick_period: u8,
+    /// Bricks shallower than this are never unloaded.
+    pub keep_levels: u8,
+    /// Unify every this many frames.
+    pub unify_every: u32,
+    /// Memory budget for the octree in bytes.
+    pub max_memory: usize,
+    /// Relative margin of the full test.
+    pub margin: f64,
+    /// Traversal used to render.
+    pub traversal: Traversal,
+    /// Time per frame for subdivision, in milliseconds (at least `min_subdivisions` are done).
+    pub subdivide_ms: f64,
+    /// Subdivisions done each frame whatever the time.
+    pub min_subdivisions: usize,
+    /// World cube the root spans: minimum corner and side (a power of two is best).
+    pub root_min: DVec3,
+    /// Side of the root cube.
+    pub root_size: f64,
+}
+
+impl Default for ExplorerConfig {
+    fn default() -> Self {
+        ExplorerConfig {
+            width: 640,
+            height: 480,
+            fidelity: 1.0,
+            threads: 2,
+            brick_period: 3,
+            keep_levels: 3,
+            unify_every: 8,
+            max_memory: 1 << 30,
+            margin: crate::generate::DEFAULT_MARGIN,
+            traversal: Traversal::Neighbour,
+            subdivide_ms: 12.0,
+            min_subdivisions: 256,
+            root_min: DVec3::splat(-2.0),
+            root_size: 4.0,
+        }
+    }
+}
+
+impl ExplorerConfig {
+    /// Checks every setting, with errors that name the option.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
+            return Err(format!(
+                "image size {}x{} is out of range (1..=16384 per side)",
+                self.width, self.height
+            ));
+        }
+        if !(self.fidelity.is_finite() && (0.25..=16.0).contains(&self.fidelity)) {
+            return Err(format!(
+                "fidelity {} is out of range [0.25, 16] (pixels per voxel)",
+                self.fidelity
+            ));
+        }
+        if self.threads == 0 || self.threads > 256 {
+            return Err(format!("threads {} is out of range 1..=256", self.threads));
+        }
+        if self.brick_period == 0 || self.brick_period > 16 {
+            return Err("brick period must be in 1..=16 levels".into());
+        }
+        if self.unify_every == 0 {
+            return Err("unify-every must be at least 1 frame".into());
+        }
+        let min_mem = 1 << 20;
+        if self.max_memory < min_mem {
+            return Err(format!(
+                "max memory {} bytes is below the minimum of 1 MiB",
+                self.max_memory
+            ));
+        }
+        if !(self.margin.is_finite() && (0.0..=1.0).contains(&self.margin)) {
+            return Err(format!("margin {} is out of range [0, 1]", self.margin));
+        }
+        if !(self.subdivide_ms.is_finite() && self.subdivide_ms >= 0.0) {
+            return Err("subdivision budget must be a non-negative number of ms".into());
+        }
+        if !(self.root_size.is_finite() && self.root_size > 0.0 && self.root_min.is_finite()) {
+            return Err("the root cube must be finite with a positive side".into());
+        }
+        Ok(())
+    }
+}
+
+/// A rendered frame: colours (RGBA8, linear) and world depth (`f32::INFINITY` for sky).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SvoImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// RGBA8 linear colours, row-major from the top-left.
+    pub colour: Vec<u32>,
+    /// Distance along the ray in world units.
+    pub depth: Vec<f32>,
+}
+
+impl SvoImage {
+    /// Silhouette mask: true where a voxel was hit.
+    pub fn mask(&self) -> Vec<bool> {
+        self.depth.iter().map(|d| d.is_finite()).collect()
+    }
+
+    /// The shared frame type, so the post effects of the sphere tracer (fog, SSAO, tonemap)
+    /// and its output writers apply to octree renders too. Voxels carry no normal or id: the
+    /// normal is zero, the id 0 for hits.
+    pub fn to_frame(&self) -> fathom_core::frame::Frame {
+        let mut f = fathom_core::frame::Frame::new(self.width, self.height);
+        for (i, (&c, &d)) in self.colour.iter().zip(&self.depth).enumerate() {
+            f.colour[i] = std::array::from_fn(|k| ((c >> (8 * k)) & 255) as f32 / 255.0);
+            f.depth[i] = d;
+            if d.is_finite() {
+                f.id[i] = 0;
+            }
+        }
+        f
+    }
+
+    /// 8-bit sRGB bytes (RGB), for PNG output.
+    pub fn to_srgb8(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.colour.len() * 3);
+        for &c in &self.colour {
+            for i in 0..3 {
+                let v = ((c >> (8 * i)) & 255) as f64 / 255.0;
+                out.push((v.powf(1.0 / 2.2) * 255.0 + 0.5) as u8);
+            }
+        }
+        out
+    }
+}
+
+/// Per-frame statistics (written as JSON by `fathom zoom --stats`).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FrameStats {
+    /// Frame number from 0.
+    pub frame: u64,
+    /// Wall time of the whole frame in ms.
+    pub frame_ms: f64,
+    /// Render phase in ms.
+    pub render_ms: f64,
+    /// Subdivision phase in ms.
+    pub subdivide_ms: f64,
+    /// Unification phase in ms.
+    pub unify_ms: f64,
+    /// Rays cast.
+    pub rays: u64,
+    /// Rays that hit a voxel.
+    pub hits: u64,
+    /// Mean nodes stepped through per ray.
+    pub nodes_per_ray: f64,
+    /// Distinct leaves rays asked to subdivide.
+    pub requests: u64,
+    /// Leaves split into children.
+    pub subdivisions: u64,
+    /// Leaves whose children were all empty.
+    pub emptied: u64,
+    /// Subdivisions refused by the memory budget.
+    pub no_memory: u64,
+    /// Bricks unloaded.
+    pub unified: u64,
+    /// Allocated node slots.
+    pub node_count: u64,
+    /// Bricks (inner nodes at brick depths).
+    pub brick_count: u64,
+    /// Bytes of the node arena.
+    pub arena_bytes: u64,
+    /// Resident memory of the process (bytes, from /proc; 0 where unavailable).
+    pub resident_bytes: u64,
+    /// Depth of the skip node (-1 when the eye is outside the root).
+    pub skip_depth: i32,
+}
+
+/// Resident set size of this process in bytes (Linux), or 0.
+pub fn resident_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/statm")
+        .ok()
+        .and_then(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
+        .map(|pages| pages * 4096)
+        .unwrap_or(0)
+}
+
+/// The scale-adaptive SVO explorer.
+pub struct Explorer {
+    /// The octree (public for checks and tools; mutate only between frames).
+    pub tree: Octree,
+    /// Tape and shading.
+    pub shader: Shader,
+    /// Settings.
+    pub cfg: ExplorerConfig,
+    sky: ([f64; 3], [f64; 3]),
+    pool: rayon::ThreadPool,
+    skip: Option<(u32, BoxU)>,
+    frame: u64,
+}
+
+impl Explorer {
+    /// An explorer of `scene` with one root voxel.
+    pub fn new(scene: &Scene, cfg: ExplorerConfig) -> Result<Explorer, String> {
+        cfg.validate()?;
+        let shader = Shader::new(scene, cfg.margin)?;
+        let max_nodes = cfg.max_memory / std::mem::size_of::<crate::node::Node>();
+        let mut tree = Octree::new(cfg.root_min, cfg.root_size, cfg.brick_period, max_nodes);
+        init_root(&mut tree, &shader);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(cfg.threads)
+            .build()
+            .map_err(|e| format!("cannot start {} threads: {e}", cfg.threads))?;
+        Ok(Explorer {
+            tree,
+            shader,
+            sky: (scene.render.sky_bottom, scene.render.sky_top),
+            cfg,
+            pool,
+            skip: None,
+            frame: 0,
+        })
+    }
+
+    /// The current skip node and its box.
+    pub fn skip(&self) -> Option<(u32, BoxU)> {
+        self.skip
+    }
+
+    /// Brings the skip node up to date for an eye at `o` (root units): stays if still valid,
+    /// else follows the link through the face the eye crossed, else descends from the root.
+    pub fn update_skip(&mut self, o: [f64; 3]) {
+        let tree = &self.tree;
+        if !BoxU::ROOT.contains(o) {
+            self.skip = None;
+            return;
+        }
+        let descend = |mut id: u32, mut b: BoxU| {
+            while !tree.nodes[id as usize].is_leaf() {
+                let oc = b.octant_of(o);
+                id = tree.nodes[id as usize].children + oc as u32;
+                b = b.child(oc);
+            }
+            (id, b)
+        };
+        if let Some((id, b)) = self.skip
+            && !tree.nodes[id as usize].is_free()
+            && tree.nodes[id as usize].depth == b.depth
+        {
+            if b.contains(o) {
+                self.skip = Some(descend(id, b));
+                return;
+            }
+            // The face the eye left through: the axis of largest excursion.
+            let s = b.dim();
+            let mut best = (0.0, 0);
+            for a in 0..3 {
+                let ex = (b.min[a] - o[a]).max(o[a] - (b.min[a] + s));
+                let f = 2 * a + (o[a] >= b.min[a] + s) as usize;
+                if ex > best.0 {
+                    best = (ex, f);
+                }
+            }
+            let nb = tree.nodes[id as usize].link(best.1);
+            if nb != NONE {
+                let nbb = b.across(best.1).snapped(tree.nodes[nb as usize].depth);
+                if nbb.contains(o) {
+                    self.skip = Some(descend(nb, nbb));
+                    return;
+                }
+            }
+        }
+        self.skip = tree.locate(o);
+    }
+
+    /// The eye never sits inside the surface, but it can sit inside a coarse full voxel that
+    /// the zoom has not refined yet: every ray would then stop at distance 0, nothing else
+    /// would be visited, and unification would unload the whole view. Subdivide the eye's
+    /// leaf (synchronously, it is one leaf per level) until it is empty or at the depth limit.
+    fn clear_eye(&mut self, o: [f64; 3]) {
+        let mut ev = Evaluator::<f64>::new();
+        while let Some((id, b)) = self.skip {
+            let n = &self.tree.nodes[id as usize];
+            if n.is_empty() || !n.is_leaf() || b.depth >= crate::octree::MAX_DEPTH {
+                return;
+            }
+            let r = eval_children(&self.shader, &self.tree, &mut ev, id, b);
+            if apply(&mut self.tree, &r) == Outcome::NoMemory {
+                return;
+            }
+            self.tree.commit_frees();
+            self.skip = self.tree.locate(o);
+        }
+    }
+
+    /// Phase 1: renders the tree as it is (read-only apart from atomics). Returns the image,
+    /// the subdivision requests and (rays, hits, node steps).
+    pub fn render(&mut self, cam: &Camera) -> (SvoImage, Vec<Request>, [u64; 3]) {
+        let frame = cam.frame();
+        let o = self.tree.to_u(cam.eye);
+        self.update_skip(o);
+        self.clear_eye(o);
+        let (w, h) = (self.cfg.width, self.cfg.height);
+        let lod = frame.pixel_angle(h) * self.cfg.fidelity;
+        let mut colour = vec![0u32; (w * h) as usize];
+        let mut depth = vec![0f32; (w * h) as usize];
+        let tree = &self.tree;
+        let skip = self.skip;
+        let trav = self.cfg.traversal;
+        let sky = self.sky;
+        let size = tree.root_size;
+        let (reqs, counts) = self.pool.install(|| {
+            colour
+                .par_chunks_mut(w as usize)
+                .zip(depth.par_chunks_mut(w as usize))
+                .enumerate()
+                .map(|(y, (crow, drow))| {
+                    let mut reqs = Vec::new();
+                    let mut c = [0u64; 3];
+                    for x in 0..w as usize {
+                        let d = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                        let ray = Ray::new(o, [d.x, d.y, d.z], lod);
+                        let hit = cast(tree, &ray, skip, trav, &mut reqs);
+                        c[0] += 1;
+                        c[2] += hit.steps as u64;
+                        if hit.is_hit() {
+                            c[1] += 1;
+                            crow[x] = hit.colour;
+                            drow[x] = (hit.t * size) as f32;
+                        } else {
+                            crow[x] = sky_colour(&frame, d, sky);
+                            drow[x] = f32::INFINITY;
+                        }
+                    }
+                    (reqs, c)
+                })
+                .reduce(
+                    || (Vec::new(), [0u64; 3]),
+                    |(mut ra, ca), (rb, cb)| {
+                        ra.extend(rb);
+                        (ra, [ca[0] + cb[0], ca[1] + cb[1], ca[2] + cb[2]])
+                    },
+                )
+        });
+        let img = SvoImage {
+            width: w,
+            height: h,
+            colour,
+            depth,
+        };
+        (img, reqs, counts)
+    }
+
+    /// Phase 2: subdivides requested leaves, largest first, within the time budget. Returns
+    /// (split, emptied, no-memory).
+    pub fn subdivide(&mut self, mut reqs: Vec<Request>, budget_ms: f64) -> [u64; 3] {
+        let t0 = Instant::now();
+        reqs.sort_unstable_by_key(|r| (r.b.depth, r.id));
+        let mut out = [0u64; 3];
+        let mut next = 0;
+        let batch = 64 * self.cfg.threads.max(1);
+        let mut done_min = 0;
+        while next < reqs.len() {
+            let elapsed = t0.elapsed().as_secs_f64() * 1e3;
+            if done_min >= self.cfg.min_subdivisions && elapsed >= budget_ms {
+                break;
+            }
+            if self.tree.counts().nodes + 8 > self.tree.max_nodes {
+                break;
+            }
+            let end = (next + batch).min(reqs.len());
+            let chunk = &reqs[next..end];
+            let tree = &self.tree;
+            let sh = &self.shader;
+            let results: Vec<Children> = self.pool.install(|| {
+                chunk
+                    .par_iter()
+                    .map_init(Evaluator::<f64>::new, |ev, r| {
+                        eval_children(sh, tree, ev, r.id, r.b)
+                    })
+                    .collect()
+            });
+            for r in &results {
+                match apply(&mut self.tree, r) {
+                    Outcome::Split => out[0] += 1,
+                    Outcome::Emptied => out[1] += 1,
+                    Outcome::NoMemory => out[2] += 1,
+                    Outcome::Stale => {}
+                }
+            }
+            done_min += chunk.len();
+            next = end;
+        }
+        for r in &reqs[next..] {
+            self.tree.nodes[r.id as usize].clear_flags(REQUESTED);
+        }
+        if next < reqs.len() && self.tree.counts().nodes + 8 > self.tree.max_nodes {
+            out[2] += (reqs.len() - next) as u64;
+        }
+        self.tree.commit_frees();
+        out
+    }
+
+    /// Clears the requested flags of requests that will not be processed (after a render
+    /// whose requests are dropped).
+    pub fn release_requests(&self, reqs: &[Request]) {
+        for r in reqs {
+            self.tree.nodes[r.id as usize].clear_flags(REQUESTED);
+        }
+    }
+
+    /// Phase 3: unloads unvisited bricks; returns how many.
+    pub fn unify(&mut self) -> usize {
+        let n = unify(&mut self.tree, self.cfg.keep_levels);
+        if let Some((id, b)) = self.skip
+            && (self.tree.nodes[id as usize].is_free()
+                || self.tree.nodes[id as usize].depth != b.depth)
+        {
+            self.skip = None;
+        }
+        n
+    }
+
+    /// Runs one whole frame: render, subdivide, maybe unify. Returns the image (as rendered:
+    /// the tree changes only after it is complete) and the stats.
+    pub fn step(&mut self, cam: &Camera) -> (SvoImage, FrameStats) {
+        let t0 = Instant::now();
+        let (img, reqs, c) = self.render(cam);
+        let render_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = Instant::now();
+        let nreq = reqs.len() as u64;
+        let sub = self.subdivide(reqs, self.cfg.subdivide_ms);
+        let subdivide_ms = t1.elapsed().as_secs_f64() * 1e3;
+        let t2 = Instant::now();
+        let pressure = self.tree.counts().nodes as f64 > 0.9 * self.tree.max_nodes as f64;
+        let unified = if pressure
+            || self.frame % self.cfg.unify_every as u64 == self.cfg.unify_every as u64 - 1
+        {
+            self.unify() as u64
+        } else {
+            0
+        };
+        let unify_ms = t2.elapsed().as_secs_f64() * 1e3;
+        let counts = self.tree.counts();
+        let stats = FrameStats {
+            frame: self.frame,
+            frame_ms: t0.elapsed().as_secs_f64() * 1e3,
+            render_ms,
+            subdivide_ms,
+            unify_ms,
+            rays: c[0],
+            hits: c[1],
+            nodes_per_ray: c[2] as f64 / c[0].max(1) as f64,
+            requests: nreq,
+            subdivisions: sub[0],
+            emptied: sub[1],
+            no_memory: sub[2],
+            unified,
+            node_count: counts.nodes as u64,
+            brick_count: counts.bricks as u64,
+            arena_bytes: self.tree.arena_bytes() as u64,
+            resident_bytes: resident_bytes(),
+            skip_depth: self.skip.map(|s| s.1.depth as i32).unwrap_or(-1),
+        };
+        self.frame += 1;
+        (img, stats)
+    }
+
+    /// Renders and subdivides at a fixed camera until no leaf asks for subdivision (or
+    /// `max_frames` pass); returns the frames taken.
+    pub fn settle(&mut self, cam: &Camera, max_frames: usize) -> usize {
+        for i in 0..max_frames {
+            let (_, reqs, _) = self.render(cam);
+            if reqs.is_empty() {
+                return i;
+            }
+            self.subdivide(reqs, f64::INFINITY);
+        }
+        max_frames
+    }
+}
+
+fn cast(
+    tree: &Octree,
+    ray: &Ray,
+    skip: Option<(u32, BoxU)>,
+    trav: Traversal,
+    reqs: &mut Vec<Request>,
+) -> Hit {
+    match trav {
+        Traversal::Neighbour => cast_neighbour(tree, ray, skip, reqs),
+        Traversal::KdRestart => cast_kdrestart(tree, ray, skip.is_some(), reqs),
+    }
+}
+
+fn sky_colour(frame: &CameraFrame, d: DVec3, sky: ([f64; 3], [f64; 3])) -> u32 {
+    let k = d.dot(DVec3::Y).max(0.0);
+    let _ = frame;
+    pack_rgb(std::array::from_fn(|i| {
+        sky.0[i] + (sky.1[i] - sky.0[i]) * k
+    }))
+}

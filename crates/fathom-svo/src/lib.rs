@@ -1,0 +1,38 @@
+//! fathom-svo: the scale-adaptive sparse voxel octree (SVO) explorer.
+//!
+//! A rebuild of the dissertation system (scale-adaptive SVO, neighbour-link traversal with a
+//! skip node, brick-based not-recently-used unification) with the frame phased so that no frame
+//! ever sees a half-updated octree. See `docs/svo.md` for the design.
+//!
+//! - [`node`]: the arena node (44 bytes) and its flags;
+//! - [`octree`]: the arena of nodes, free list of child blocks, boxes and counts;
+//! - [`generate`]: the conservative full test, subdivision and recombination;
+//! - [`traverse`]: neighbour traversal with skip node and link optimisation, kd-restart;
+//! - [`evict`]: bricks, visited flags, NRU unification with link repair;
+//! - [`check`]: the link-integrity checker;
+//! - [`outline`]: silhouette agreement with a sphere tracer, image similarity;
+//! - [`explorer`]: one frame = render (read-only) -> subdivide -> unify; stats;
+//! - [`zoom`]: camera paths (point-of-recursion zooms, the tour) and the precision guard;
+//! - [`scenes`]: code-built scenes used by the presets and tests;
+//! - [`stats`]: summaries of per-frame stats.
+
+// Loops over the three axes index several arrays at once.
+#![allow(clippy::needless_range_loop)]
+
+pub mod check;
+pub mod evict;
+pub mod explorer;
+pub mod generate;
+pub mod node;
+pub mod octree;
+pub mod outline;
+pub mod scenes;
+pub mod stats;
+pub mod traverse;
+pub mod zoom;
+
+pub use explorer::{Explorer, ExplorerConfig, FrameStats, SvoImage, Traversal};
+pub use octree::Octree;
+
+#[cfg(test)]
+mod tests;

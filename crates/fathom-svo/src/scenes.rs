@@ -1,0 +1,62 @@
+//! Code-built scenes for the zoom presets and the tests: the Menger sponge, the Mandelbox and a
+//! sphere. (The Mandelbulb comes from fathom-core's presets.)
+
+use fathom_core::fractals::Fractal;
+use fathom_core::primitives::Primitive;
+use fathom_core::scene::{Call, Material, Node, Scene};
+use glam::DVec3;
+
+/// The Menger sponge spanning `[-1, 1]^3` (fathom-core's `Menger` estimator, a distance
+/// bound) with `iterations` levels of holes.
+pub fn menger(iterations: u32) -> Scene {
+    let shape = Call::new(Fractal::Menger).with("iterations", &[iterations as f64]);
+    let root = Node::new(shape).material(Material {
+        albedo: [0.8, 0.75, 0.65],
+        trap_colour: 0.35,
+        ..Material::default()
+    });
+    let mut s = Scene::new(root);
+    s.camera.eye = DVec3::new(2.6, 2.0, 3.2);
+    s.camera.target = DVec3::ZERO;
+    s
+}
+
+/// The Mandelbox with fathom-core's default parameters (scale -1.5).
+pub fn mandelbox() -> Scene {
+    let mut s = Scene::new(Node::new(Call::new(Fractal::Mandelbox)));
+    s.camera.eye = DVec3::new(3.0, 2.4, 4.2);
+    s.camera.target = DVec3::ZERO;
+    s
+}
+
+/// A sphere of radius `r` at the origin.
+pub fn sphere(r: f64) -> Scene {
+    Scene::new(Node::new(Call::new(Primitive::Sphere).with("radius", &[r])))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fathom_core::Tape;
+
+    #[test]
+    fn menger_has_its_holes_and_corners() {
+        let t = Tape::compile(&menger(8)).unwrap();
+        let d = |p: [f64; 3]| t.eval_f64(p).d;
+        // Corners and edge points are on the surface (distance ~0), the centre tunnel and the
+        // face-centre holes are empty, points far out are far.
+        assert!(d([1.0, 1.0, 1.0]).abs() < 1e-9);
+        assert!(d([1.0, 1.0, 0.0]).abs() < 1e-9, "{}", d([1.0, 1.0, 0.0]));
+        assert!(d([0.0, 0.0, 0.0]) > 0.3, "centre {}", d([0.0, 0.0, 0.0]));
+        assert!(d([0.0, 0.0, 0.9]) > 0.3, "tunnel {}", d([0.0, 0.0, 0.9]));
+        // The 1/3-scale hole in the face x = 1 centred at (1, 2/3, 2/3).
+        assert!(d([1.0, 2.0 / 3.0, 2.0 / 3.0]) > 0.1);
+        // A solid point: in the corner subcube at its own corner region.
+        assert!(d([0.95, 0.95, 0.95]) <= 0.0 + 1e-12);
+        assert!((d([3.0, 0.5, 0.5]) - 2.0).abs() < 1e-6);
+        let b = Tape::compile(&mandelbox()).unwrap();
+        for p in [[3.0, 0.0, 0.0], [0.0, 3.0, 0.0], [2.2, 2.2, 2.2]] {
+            assert!(b.eval_f64(p).d > 0.0, "the Mandelbox reaches {p:?}");
+        }
+    }
+}

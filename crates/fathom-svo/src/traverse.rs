@@ -1,0 +1,349 @@
+//! Ray casting through the octree: scale-independent neighbour traversal with a skip node and
+//! on-the-fly link optimisation, and the kd-restart baseline.
+//!
+//! Both walk the same sequence of leaves and return bit-identical results on the same tree:
+//! - a ray is `o + t d` in root units (`d` unit length, so `t` is a distance in root units);
+//! - the leaf at a point is the one whose half-open box contains it; boxes are exact dyadics;
+//! - leaving an empty leaf, `t` becomes the exit distance and the point is put exactly on the
+//!   far side of the exit face (the face coordinate, or the float just below it);
+//! - implicit LOD: the ray stops at the topmost inner node on the root-to-leaf path of the
+//!   point whose side is below `t * lod`, returning that node's average colour.
+//!
+//! kd-restart finds each leaf by descending from the root. Neighbour traversal steps through
+//! the exit face's link (a same-or-coarser node), climbs while the point is outside the box or
+//! the parent already satisfies the LOD test (corner cases and LOD agreement), then descends.
+//! The first leaf is the skip node (the leaf containing the eye), so a ray never descends from
+//! the root when the eye is inside it. When a link pointed to a coarser node, the deepest node
+//! of the descent no deeper than the link's owner replaces it (an atomic store: any valid link
+//! is correct, a better one only saves steps).
+
+use crate::evict::mark_visited;
+use crate::node::{NONE, REQUESTED};
+use crate::octree::{BoxU, MAX_DEPTH, Octree, dim_at};
+
+/// Most node steps one ray may take before it is declared a miss (a guard, never reached on a
+/// consistent tree).
+pub const MAX_STEPS: u32 = 1 << 16;
+
+/// A ray in root units.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray {
+    /// Origin.
+    pub o: [f64; 3],
+    /// Unit direction.
+    pub d: [f64; 3],
+    /// Implicit-LOD factor: a node is below the pixel footprint when `side < t * lod`.
+    pub lod: f64,
+    /// `1 / d` per axis.
+    pub inv: [f64; 3],
+}
+
+impl Ray {
+    /// A ray from `o` along unit `d` with LOD factor `lod`.
+    pub fn new(o: [f64; 3], d: [f64; 3], lod: f64) -> Ray {
+        Ray {
+            o,
+            d,
+            lod,
+            inv: d.map(|x| 1.0 / x),
+        }
+    }
+}
+
+/// What a ray found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Distance in root units (`f64::INFINITY` for a miss).
+    pub t: f64,
+    /// RGBA8 colour of the node hit (0 for a miss).
+    pub colour: u32,
+    /// Node hit, or [`NONE`].
+    pub node: u32,
+    /// Nodes stepped through (descents, ascents and neighbour steps, plus one).
+    pub steps: u32,
+}
+
+impl Hit {
+    fn miss(steps: u32) -> Hit {
+        Hit {
+            t: f64::INFINITY,
+            colour: 0,
+            node: NONE,
+            steps,
+        }
+    }
+
+    /// True when the ray hit a voxel.
+    pub fn is_hit(&self) -> bool {
+        self.node != NONE
+    }
+}
+
+/// A full leaf a ray found larger than its pixel footprint.
+#[derive(Clone, Copy, Debug)]
+pub struct Request {
+    /// The leaf.
+    pub id: u32,
+    /// Its box.
+    pub b: BoxU,
+}
+
+/// Where a ray starts: the leaf containing the eye and its box.
+pub type Start = Option<(u32, BoxU)>;
+
+/// Entry distance into the root and the point just inside it, or `None` when the ray misses.
+fn enter_root(r: &Ray) -> Option<(f64, [f64; 3])> {
+    let mut t0 = 0.0f64;
+    let mut t1 = f64::INFINITY;
+    let mut axis = 3;
+    for a in 0..3 {
+        if r.d[a] == 0.0 {
+            if r.o[a] < 0.0 || r.o[a] >= 1.0 {
+                return None;
+            }
+            continue;
+        }
+        let (n, f) = if r.d[a] > 0.0 {
+            (-r.o[a] / r.d[a], (1.0 - r.o[a]) / r.d[a])
+        } else {
+            ((1.0 - r.o[a]) / r.d[a], -r.o[a] / r.d[a])
+        };
+        if n > t0 {
+            t0 = n;
+            axis = a;
+        }
+        t1 = t1.min(f);
+    }
+    if t0 > t1 {
+        return None;
+    }
+    let mut p = point(r, t0);
+    if axis < 3 {
+        p[axis] = if r.d[axis] > 0.0 {
+            0.0
+        } else {
+            1f64.next_down()
+        };
+    }
+    Some((t0, p))
+}
+
+#[inline(always)]
+fn point(r: &Ray, t: f64) -> [f64; 3] {
+    [
+        r.o[0] + t * r.d[0],
+        r.o[1] + t * r.d[1],
+        r.o[2] + t * r.d[2],
+    ]
+}
+
+/// Exit distance of the ray from box `b`, the exit face, and the point just across it.
+#[inline(always)]
+fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
+    let s = b.dim();
+    let mut best = f64::INFINITY;
+    let mut axis = 0;
+    for a in 0..3 {
+        let da = r.d[a];
+        if da == 0.0 {
+            continue;
+        }
+        let face = if da > 0.0 { b.min[a] + s } else { b.min[a] };
+        // Multiplying by the precomputed reciprocal: both traversals do the same, so their
+        // results stay identical.
+        let ta = (face - r.o[a]) * r.inv[a];
+        if ta < best {
+            best = ta;
+            axis = a;
+        }
+    }
+    let t = best.max(t);
+    let pos = r.d[axis] > 0.0;
+    let face = if pos {
+        b.min[axis] + s
+    } else {
+        b.min[axis].next_down()
+    };
+    // Built component by component (no indexed store into an array that is then read whole:
+    // that stalls store forwarding in this hot loop).
+    let c = |a: usize| {
+        if a == axis { face } else { r.o[a] + t * r.d[a] }
+    };
+    let p = [c(0), c(1), c(2)];
+    (t, 2 * axis + pos as usize, p)
+}
+
+/// The leaf (or LOD-terminating inner node) handling shared by both traversals. Returns the
+/// hit when the ray stops here.
+#[inline(always)]
+fn stop_here(
+    tree: &Octree,
+    id: u32,
+    b: &BoxU,
+    t: f64,
+    lod: f64,
+    steps: u32,
+    reqs: &mut Vec<Request>,
+) -> Option<Hit> {
+    let n = &tree.nodes[id as usize];
+    mark_visited(tree, id);
+    if n.is_empty() {
+        return None;
+    }
+    if b.dim() > t * lod && b.depth < MAX_DEPTH && n.claim(REQUESTED) {
+        reqs.push(Request { id, b: *b });
+    }
+    Some(Hit {
+        t,
+        colour: n.colour,
+        node: id,
+        steps,
+    })
+}
+
+/// Neighbour traversal from the skip node (`start`, the leaf containing the eye; `None` when
+/// the eye is outside the root: one descent from the root then).
+pub fn cast_neighbour(tree: &Octree, r: &Ray, start: Start, reqs: &mut Vec<Request>) -> Hit {
+    let nodes = &tree.nodes;
+    let (mut id, mut b, mut t, mut p) = match start {
+        Some((id, b)) => (id, b, 0.0, r.o),
+        None => match enter_root(r) {
+            Some((t, p)) => (0, BoxU::ROOT, t, p),
+            None => return Hit::miss(0),
+        },
+    };
+    let lod = r.lod;
+    let mut steps = 1u32;
+    // Link to improve: (owner, face, owner depth, link target).
+    let mut opt: Option<(u32, usize, u8, u32)> = None;
+    loop {
+        // Climb while the point is outside, or the parent is already below the footprint.
+        loop {
+            let lod_parent = b.depth > 0 && dim_at(b.depth - 1) < t * lod;
+            if !lod_parent && b.contains(p) {
+                break;
+            }
+            if b.depth == 0 {
+                return Hit::miss(steps);
+            }
+            opt = None;
+            id = nodes[id as usize].parent;
+            b = b.parent();
+            steps += 1;
+        }
+        // Descend to the leaf, or stop early on an inner node below the footprint.
+        loop {
+            let n = &nodes[id as usize];
+            if n.is_leaf() {
+                break;
+            }
+            if b.dim() < t * lod {
+                mark_visited(tree, id);
+                return Hit {
+                    t,
+                    colour: n.colour,
+                    node: id,
+                    steps,
+                };
+            }
+            let o = b.octant_of(p);
+            id = n.children + o as u32;
+            b = b.child(o);
+            steps += 1;
+            if let Some((owner, f, dn, _)) = opt
+                && b.depth == dn
+            {
+                nodes[owner as usize].set_link(f, id);
+                opt = None;
+            }
+        }
+        if let Some((owner, f, dn, old)) = opt.take()
+            && b.depth <= dn
+            && id != old
+        {
+            nodes[owner as usize].set_link(f, id);
+        }
+        if let Some(h) = stop_here(tree, id, &b, t, lod, steps, reqs) {
+            return h;
+        }
+        if steps > MAX_STEPS {
+            return Hit::miss(steps);
+        }
+        let (t1, f, p1) = exit(r, &b, t);
+        let nb = nodes[id as usize].link(f);
+        if nb == NONE {
+            return Hit::miss(steps);
+        }
+        // The exit point lies in the same-size box across the face unless it left through an
+        // edge or corner; only then is the link's improvement well defined.
+        let axis = f >> 1;
+        let s = b.dim();
+        let inside = (0..3).all(|a| a == axis || (p1[a] >= b.min[a] && p1[a] < b.min[a] + s));
+        let nd = nodes[nb as usize].depth;
+        opt = if inside && nd < b.depth {
+            Some((id, f, b.depth, nb))
+        } else {
+            None
+        };
+        b = if nd == b.depth {
+            b.across(f)
+        } else {
+            b.across(f).snapped(nd)
+        };
+        id = nb;
+        t = t1;
+        p = p1;
+        steps += 1;
+    }
+}
+
+/// kd-restart: every leaf is found by a descent from the root.
+pub fn cast_kdrestart(tree: &Octree, r: &Ray, eye_inside: bool, reqs: &mut Vec<Request>) -> Hit {
+    let nodes = &tree.nodes;
+    let (mut t, mut p) = if eye_inside {
+        (0.0, r.o)
+    } else {
+        match enter_root(r) {
+            Some(x) => x,
+            None => return Hit::miss(0),
+        }
+    };
+    let lod = r.lod;
+    let mut steps = 0u32;
+    loop {
+        let mut b = BoxU::ROOT;
+        if !b.contains(p) {
+            return Hit::miss(steps);
+        }
+        let mut id = 0u32;
+        steps += 1;
+        loop {
+            let n = &nodes[id as usize];
+            if n.is_leaf() {
+                break;
+            }
+            if b.dim() < t * lod {
+                mark_visited(tree, id);
+                return Hit {
+                    t,
+                    colour: n.colour,
+                    node: id,
+                    steps,
+                };
+            }
+            let o = b.octant_of(p);
+            id = n.children + o as u32;
+            b = b.child(o);
+            steps += 1;
+        }
+        if let Some(h) = stop_here(tree, id, &b, t, lod, steps, reqs) {
+            return h;
+        }
+        if steps > MAX_STEPS {
+            return Hit::miss(steps);
+        }
+        let (t1, _, p1) = exit(r, &b, t);
+        t = t1;
+        p = p1;
+    }
+}

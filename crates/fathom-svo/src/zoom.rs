@@ -1,0 +1,244 @@
+//! Camera paths for exploration: the automated zooms into a point of recursion of the Menger
+//! sponge and into a point of the Mandelbulb surface, a cinematic tour, and the guard that
+//! stops a zoom cleanly at the limit of f64 precision.
+
+use crate::octree::MAX_DEPTH;
+use crate::scenes;
+use fathom_core::eval::Evaluator;
+use fathom_core::scene::Scene;
+use fathom_core::{Camera, Tape, V3};
+use glam::DVec3;
+
+/// A camera path over `frames` frames.
+#[derive(Clone, Debug)]
+pub enum Path {
+    /// Eye at `target + dir * start * depth^(-i / (frames - 1))`, looking at `target`.
+    Zoom {
+        /// Point zoomed into.
+        target: DVec3,
+        /// Unit direction from the target to the eye.
+        dir: DVec3,
+        /// Eye distance at frame 0.
+        start: f64,
+    },
+    /// Catmull-Rom through (eye, target) waypoints.
+    Tour {
+        /// Waypoints: eye and look-at point.
+        points: Vec<(DVec3, DVec3)>,
+    },
+}
+
+/// A scene with the root cube and path to explore it by.
+#[derive(Clone, Debug)]
+pub struct ZoomPreset {
+    /// Preset name.
+    pub name: &'static str,
+    /// The scene.
+    pub scene: Scene,
+    /// Vertical field of view (degrees).
+    pub fov: f64,
+    /// The camera path.
+    pub path: Path,
+}
+
+/// Names accepted by [`preset`].
+pub const PRESETS: &[&str] = &["menger", "mandelbulb", "menger-tour"];
+
+/// The zoom presets: `menger` zooms into the corner (1, 1, 1), a fixed point of the sponge's
+/// scaling by 1/3 (images at distances 1/3, 1/9, 1/27 of each other are strictly self-similar);
+/// `mandelbulb` zooms into a surface point found by tracing the preset's view; `menger-tour`
+/// orbits the sponge and flies down its central tunnel.
+pub fn preset(name: &str) -> Result<ZoomPreset, String> {
+    match name {
+        "menger" => Ok(ZoomPreset {
+            name: "menger",
+            scene: scenes::menger(40),
+            fov: 50.0,
+            path: Path::Zoom {
+                target: DVec3::ONE,
+                dir: DVec3::new(1.0, 0.8, 0.6).normalize(),
+                start: 1.5,
+            },
+        }),
+        "mandelbulb" => {
+            let scene = fathom_core::presets::load("mandelbulb")?;
+            let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;
+            let eye = scene.camera.eye;
+            let aim = DVec3::new(0.25, 0.3, 0.0);
+            let target = surface_point(&tape, eye, (aim - eye).normalize())
+                .ok_or("the Mandelbulb zoom ray missed the surface")?;
+            Ok(ZoomPreset {
+                name: "mandelbulb",
+                fov: scene.camera.fov,
+                path: Path::Zoom {
+                    target,
+                    dir: (eye - target).normalize(),
+                    start: (eye - target).length(),
+                },
+                scene,
+            })
+        }
+        "menger-tour" => Ok(ZoomPreset {
+            name: "menger-tour",
+            scene: scenes::menger(40),
+            fov: 60.0,
+            path: Path::Tour {
+                points: vec![
+                    (DVec3::new(3.0, 2.2, 3.4), DVec3::ZERO),
+                    (DVec3::new(3.4, 1.0, -2.4), DVec3::ZERO),
+                    (DVec3::new(-2.6, 0.6, -2.8), DVec3::ZERO),
+                    (DVec3::new(-2.4, 0.3, 2.2), DVec3::ZERO),
+                    (DVec3::new(0.0, 0.05, 2.4), DVec3::new(0.0, 0.0, 0.0)),
+                    (DVec3::new(0.0, 0.0, 1.2), DVec3::new(0.0, 0.0, -1.0)),
+                    (DVec3::new(0.0, 0.0, 0.4), DVec3::new(0.0, 0.0, -1.0)),
+                    (DVec3::new(0.05, 0.0, -0.4), DVec3::new(0.3, 0.0, -1.2)),
+                ],
+            },
+        }),
+        _ => Err(fathom_core::call_serde::unknown_name(
+            "zoom preset",
+            name,
+            PRESETS.iter().copied(),
+        )),
+    }
+}
+
+/// Sphere-traces from `eye` along `dir` to within 1e-15 of the surface (f64 path).
+pub fn surface_point(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> {
+    let mut ev = Evaluator::<f64>::new();
+    let mut t = 0.0;
+    for _ in 0..100_000 {
+        let p = eye + dir * t;
+        let d = ev.distance(tape, V3::new(p.x, p.y, p.z));
+        if d < 1e-15 {
+            return Some(p);
+        }
+        t += d;
+        if t > 100.0 {
+            return None;
+        }
+    }
+    None
+}
+
+impl ZoomPreset {
+    /// The camera at frame `i` of `frames` for a zoom of `depth` (ratio of first to last eye
+    /// distance; ignored by tours).
+    pub fn camera(&self, i: usize, frames: usize, depth: f64) -> Camera {
+        let f = if frames > 1 {
+            i as f64 / (frames - 1) as f64
+        } else {
+            0.0
+        };
+        let (eye, target) = match &self.path {
+            Path::Zoom { target, dir, start } => {
+                (*target + *dir * (start * depth.powf(-f)), *target)
+            }
+            Path::Tour { points } => catmull_rom(points, f),
+        };
+        let fwd = (target - eye).normalize();
+        let up = if fwd.cross(DVec3::Y).length() > 1e-3 {
+            DVec3::Y
+        } else {
+            DVec3::X
+        };
+        Camera {
+            eye,
+            target,
+            up,
+            fov: self.fov,
+        }
+    }
+
+    /// Zoom factor reached at frame `i` (1 for tours).
+    pub fn zoom_at(&self, i: usize, frames: usize, depth: f64) -> f64 {
+        match self.path {
+            Path::Zoom { .. } if frames > 1 => depth.powf(i as f64 / (frames - 1) as f64),
+            _ => 1.0,
+        }
+    }
+}
+
+fn catmull_rom(p: &[(DVec3, DVec3)], f: f64) -> (DVec3, DVec3) {
+    let n = p.len() - 1;
+    let x = f.clamp(0.0, 1.0) * n as f64;
+    let i = (x.floor() as usize).min(n - 1);
+    let u = x - i as f64;
+    let g = |k: isize| p[k.clamp(0, n as isize) as usize];
+    let (a, b, c, d) = (
+        g(i as isize - 1),
+        g(i as isize),
+        g(i as isize + 1),
+        g(i as isize + 2),
+    );
+    let cr = |a: DVec3, b: DVec3, c: DVec3, d: DVec3| {
+        0.5 * (2.0 * b
+            + (c - a) * u
+            + (2.0 * a - 5.0 * b + 4.0 * c - d) * u * u
+            + (3.0 * b - a - 3.0 * c + d) * u * u * u)
+    };
+    (cr(a.0, b.0, c.0, d.0), cr(a.1, b.1, c.1, d.1))
+}
+
+/// Checks that an eye at distance `dist` (world) from the nearest surface can still be drawn
+/// with f64 root-unit coordinates: the voxels it needs must be no deeper than [`MAX_DEPTH`].
+/// Returns the depth needed, or an error that says the precision limit is reached.
+pub fn precision_check(
+    dist: f64,
+    root_size: f64,
+    pixel_angle: f64,
+    fidelity: f64,
+    zoom: f64,
+) -> Result<u32, String> {
+    let footprint = dist / root_size * pixel_angle * fidelity;
+    let need = (-footprint.log2()).ceil().max(0.0) as u32;
+    if !footprint.is_finite() || footprint <= 0.0 || need > MAX_DEPTH as u32 {
+        return Err(format!(
+            "f64 precision limit reached at zoom {zoom:.3e}: voxels of one pixel would need octree \
+             depth {need}, deeper than {MAX_DEPTH} (2^-{MAX_DEPTH} of the root is 32 ulps of a root \
+             coordinate); stopping here rather than rendering garbage (see docs/svo.md)"
+        ));
+    }
+    Ok(need)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zoom_paths_reach_their_depth_and_tours_hit_their_waypoints() {
+        let p = preset("menger").unwrap();
+        let c0 = p.camera(0, 11, 1e10);
+        let c1 = p.camera(10, 11, 1e10);
+        let d0 = (c0.eye - DVec3::ONE).length();
+        let d1 = (c1.eye - DVec3::ONE).length();
+        assert!((d0 / d1 / 1e10 - 1.0).abs() < 1e-4, "{}", d0 / d1);
+        let t = preset("menger-tour").unwrap();
+        let Path::Tour { points } = &t.path else {
+            panic!()
+        };
+        let c = t.camera(0, 100, 1.0);
+        assert!((c.eye - points[0].0).length() < 1e-12);
+        let c = t.camera(99, 100, 1.0);
+        assert!((c.eye - points.last().unwrap().0).length() < 1e-12);
+        assert!(preset("mengr").unwrap_err().contains("menger"));
+    }
+
+    #[test]
+    fn precision_guard_says_so() {
+        assert!(precision_check(1.0, 4.0, 1e-3, 1.0, 1.0).is_ok());
+        let e = precision_check(1e-13, 4.0, 1e-3, 1.0, 1e13).unwrap_err();
+        assert!(e.contains("precision limit"), "{e}");
+    }
+
+    #[test]
+    fn mandelbulb_target_is_on_the_surface() {
+        let p = preset("mandelbulb").unwrap();
+        let Path::Zoom { target, .. } = p.path else {
+            panic!()
+        };
+        let tape = Tape::compile(&p.scene).unwrap();
+        assert!(tape.eval_f64([target.x, target.y, target.z]).d.abs() < 1e-12);
+    }
+}

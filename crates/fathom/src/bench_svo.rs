@@ -1,0 +1,369 @@
+//! `fathom bench svo`: the dissertation's evaluation of the sparse voxel octree explorer,
+//! reproduced. Writes `report.md`, `results.json` and PNG plots (plotters) to a directory.
+//!
+//! Experiments: fps against zoom depth for neighbour vs kd-restart traversal (Menger and
+//! Mandelbulb); node and brick count over the zoom; fps against image size and fidelity;
+//! 1 vs 2 threads; outline agreement with a sphere tracer; strict self-similarity of Menger
+//! frames at 1/3, 1/9, 1/27 of the distance.
+
+use crate::cmd_zoom::{TraversalArg, ZoomArgs, ZoomReport, parse_size, run_zoom};
+use clap::Args;
+use fathom_svo::outline::{agreement, similarity};
+use fathom_svo::stats::median;
+use fathom_svo::zoom::{self, Path};
+use fathom_svo::{Explorer, ExplorerConfig, scenes};
+use plotters::prelude::*;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path as FsPath, PathBuf};
+
+#[derive(Args)]
+pub struct SvoArgs {
+    /// Directory for report.md, results.json and the plots.
+    #[arg(long, default_value = "bench-svo")]
+    pub out: PathBuf,
+    /// Frames per zoom run.
+    #[arg(long, default_value_t = 1000)]
+    pub frames: usize,
+    /// Zoom factor of the zoom runs.
+    #[arg(long, default_value_t = 1e11)]
+    pub depth: f64,
+    /// Image size of the zoom runs.
+    #[arg(long, default_value = "640x480")]
+    pub size: String,
+    /// Small and fast: 160x120, 150 frames, zoom 1e5 (a smoke test of the whole bench).
+    #[arg(long)]
+    pub quick: bool,
+}
+
+#[derive(Serialize, Default)]
+struct Results {
+    zooms: Vec<ZoomFigures>,
+    size_fidelity: Vec<(String, f64, f64)>,
+    threads: Vec<(usize, f64)>,
+    outline: Vec<(String, fathom_svo::outline::Agreement)>,
+    self_similarity: Vec<(String, f64, f64)>,
+}
+
+#[derive(Serialize)]
+struct ZoomFigures {
+    preset: String,
+    traversal: String,
+    summary: fathom_svo::stats::Summary,
+    stopped: Option<String>,
+}
+
+fn zoom_args(preset: &str, t: TraversalArg, frames: usize, depth: f64, size: &str) -> ZoomArgs {
+    ZoomArgs {
+        preset: preset.into(),
+        depth,
+        frames,
+        size: size.into(),
+        output: None,
+        stats: None,
+        traversal: t,
+        threads: 2,
+        fidelity: 1.0,
+        max_memory: "1G".into(),
+        subdivide_ms: 12.0,
+        ssao: 0.0,
+    }
+}
+
+/// fps per decade of zoom: (log10 zoom at the decade's middle, median fps).
+fn per_decade(r: &ZoomReport) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    let top = r.zoom.iter().copied().fold(1.0, f64::max).log10().ceil() as i32;
+    for d in 0..top.max(1) {
+        let fps: Vec<f64> = r
+            .frames
+            .iter()
+            .zip(&r.zoom)
+            .filter(|(_, z)| z.log10() >= d as f64 && z.log10() < (d + 1) as f64)
+            .map(|(f, _)| 1e3 / f.frame_ms.max(1e-6))
+            .collect();
+        if !fps.is_empty() {
+            out.push((d as f64 + 0.5, median(&fps)));
+        }
+    }
+    out
+}
+
+const COLOURS: [RGBColor; 4] = [RED, BLUE, GREEN, MAGENTA];
+
+/// Line plot without text (the bitmap backend here has no font); axes are described in the
+/// report. Returns an error message instead of failing the bench.
+fn plot(path: &FsPath, series: &[Vec<(f64, f64)>]) -> Result<(), String> {
+    let pts: Vec<&(f64, f64)> = series.iter().flatten().collect();
+    if pts.is_empty() {
+        return Err("no data".into());
+    }
+    let (x0, x1) = pts
+        .iter()
+        .fold((f64::MAX, f64::MIN), |a, p| (a.0.min(p.0), a.1.max(p.0)));
+    let y1 = pts.iter().fold(0.0f64, |a, p| a.max(p.1)) * 1.1 + 1e-9;
+    let root = BitMapBackend::new(path, (640, 400)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut chart = ChartBuilder::on(&root)
+        .margin(20)
+        .build_cartesian_2d(x0..x1.max(x0 + 1e-9), 0.0..y1)
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_labels(0)
+        .y_labels(0)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (s, c) in series.iter().zip(COLOURS.iter().cycle()) {
+        chart
+            .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
+            .map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+fn range(series: &[Vec<(f64, f64)>]) -> String {
+    let pts: Vec<&(f64, f64)> = series.iter().flatten().collect();
+    let (x0, x1) = pts
+        .iter()
+        .fold((f64::MAX, f64::MIN), |a, p| (a.0.min(p.0), a.1.max(p.0)));
+    let y1 = pts.iter().fold(0.0f64, |a, p| a.max(p.1)) * 1.1;
+    format!("x from {x0:.3} to {x1:.3}, y from 0 to {y1:.3}")
+}
+
+pub fn run(a: SvoArgs) -> Result<(), String> {
+    let (frames, depth, size) = if a.quick {
+        (150, 1e5, "160x120".to_string())
+    } else {
+        (a.frames, a.depth, a.size.clone())
+    };
+    parse_size(&size)?;
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| format!("cannot create {}: {e}", a.out.display()))?;
+    let mut md = String::new();
+    let mut res = Results::default();
+    let _ = writeln!(
+        md,
+        "# SVO explorer evaluation\n\nGenerated by `fathom bench svo{}`: {frames} frames per zoom, zoom {depth:.0e}, {size}, 2 threads unless stated. \
+         Plots have no text (no font in the bitmap backend); each plot's axes and series are listed under it.\n",
+        if a.quick { " --quick" } else { "" }
+    );
+
+    // 1. fps against zoom depth, neighbour vs kd-restart; node and brick counts.
+    let _ = writeln!(
+        md,
+        "## fps against zoom depth\n\n| preset | traversal | median fps (settled) | last/first decade fps | nodes/ray (last decade) | peak resident MiB | max/first-cycle nodes | stopped |\n|---|---|---|---|---|---|---|---|"
+    );
+    let mut speedups = Vec::new();
+    for preset in ["menger", "mandelbulb"] {
+        let mut series = Vec::new();
+        let mut last = Vec::new();
+        for t in [TraversalArg::Neighbour, TraversalArg::Kdrestart] {
+            eprintln!("bench svo: {preset} {t:?}");
+            let r = run_zoom(&zoom_args(preset, t, frames, depth, &size), true)?;
+            let s = &r.summary;
+            let _ = writeln!(
+                md,
+                "| {preset} | {t:?} | {:.1} | {:.2} | {:.1} | {:.1} | {:.3} | {} |",
+                s.median_fps_settled,
+                s.last_over_first,
+                s.nodes_per_ray_last_decade,
+                s.peak_resident_bytes as f64 / 1048576.0,
+                s.max_over_first_cycle,
+                r.stopped.as_deref().map(|_| "precision").unwrap_or("no")
+            );
+            last.push(s.median_fps_last_decade);
+            series.push(per_decade(&r));
+            if matches!(t, TraversalArg::Neighbour) && preset == "menger" {
+                let nodes: Vec<(f64, f64)> = r
+                    .frames
+                    .iter()
+                    .map(|f| (f.frame as f64, f.node_count as f64))
+                    .collect();
+                let bricks: Vec<(f64, f64)> = r
+                    .frames
+                    .iter()
+                    .map(|f| (f.frame as f64, f.brick_count as f64))
+                    .collect();
+                let p1 = a.out.join("menger-nodes.png");
+                let p2 = a.out.join("menger-bricks.png");
+                let e1 = plot(&p1, std::slice::from_ref(&nodes)).err();
+                let e2 = plot(&p2, std::slice::from_ref(&bricks)).err();
+                let _ = writeln!(
+                    md,
+                    "\n![nodes](menger-nodes.png) node count per frame ({}){}\n\n![bricks](menger-bricks.png) brick count per frame ({}){}\n",
+                    range(&[nodes]),
+                    e1.map(|e| format!(" plot failed: {e}")).unwrap_or_default(),
+                    range(&[bricks]),
+                    e2.map(|e| format!(" plot failed: {e}")).unwrap_or_default()
+                );
+            }
+            res.zooms.push(ZoomFigures {
+                preset: preset.into(),
+                traversal: format!("{t:?}"),
+                summary: r.summary.clone(),
+                stopped: r.stopped.clone(),
+            });
+        }
+        let sp = if last[1] > 0.0 {
+            last[0] / last[1]
+        } else {
+            0.0
+        };
+        speedups.push((preset, sp));
+        let png = format!("{preset}-fps.png");
+        let e = plot(&a.out.join(&png), &series).err();
+        let _ = writeln!(
+            md,
+            "\n![fps]({png}) {preset}: median fps per decade of zoom, x = log10 zoom, red neighbour, blue kd-restart ({}){}\n",
+            range(&series),
+            e.map(|e| format!(" plot failed: {e}")).unwrap_or_default()
+        );
+    }
+    for (p, s) in &speedups {
+        let _ = writeln!(
+            md,
+            "- {p}: neighbour / kd-restart median fps over the deepest decade: {s:.2}x"
+        );
+    }
+
+    // 2. fps against image size and fidelity (Mandelbulb zoom start).
+    let _ = writeln!(
+        md,
+        "\n## fps against image size and fidelity (Mandelbulb, first 60 frames)\n\n| size | fidelity | median fps (frames 30..60) |\n|---|---|---|"
+    );
+    let sizes = if a.quick {
+        vec!["80x60", "160x120"]
+    } else {
+        vec!["160x120", "320x240", "640x480"]
+    };
+    let mut fid_series = Vec::new();
+    for fid in [1.0, 2.0, 4.0] {
+        let mut s = Vec::new();
+        for sz in &sizes {
+            let mut z = zoom_args("mandelbulb", TraversalArg::Neighbour, 60, 10.0, sz);
+            z.fidelity = fid;
+            let r = run_zoom(&z, true)?;
+            let fps: Vec<f64> = r.frames[30.min(r.frames.len())..]
+                .iter()
+                .map(|f| 1e3 / f.frame_ms)
+                .collect();
+            let m = median(&fps);
+            let _ = writeln!(md, "| {sz} | {fid} | {m:.1} |");
+            res.size_fidelity.push((sz.to_string(), fid, m));
+            s.push((parse_size(sz)?.0 as f64, m));
+        }
+        fid_series.push(s);
+    }
+    let e = plot(&a.out.join("size-fidelity.png"), &fid_series).err();
+    let _ = writeln!(
+        md,
+        "\n![size](size-fidelity.png) x = image width, y = median fps; red fidelity 1, blue 2, green 4 ({}){}\n",
+        range(&fid_series),
+        e.map(|e| format!(" plot failed: {e}")).unwrap_or_default()
+    );
+
+    // 3. Threads.
+    let _ = writeln!(
+        md,
+        "## 1 vs 2 threads (Menger, first 60 frames, {size})\n\n| threads | median fps (frames 30..60) |\n|---|---|"
+    );
+    for th in [1, 2] {
+        let mut z = zoom_args("menger", TraversalArg::Neighbour, 60, 10.0, &size);
+        z.threads = th;
+        let r = run_zoom(&z, true)?;
+        let fps: Vec<f64> = r.frames[30.min(r.frames.len())..]
+            .iter()
+            .map(|f| 1e3 / f.frame_ms)
+            .collect();
+        let m = median(&fps);
+        let _ = writeln!(md, "| {th} | {m:.1} |");
+        res.threads.push((th, m));
+    }
+
+    // 4. Outline agreement with a sphere tracer.
+    let _ = writeln!(
+        md,
+        "\n## Outline agreement with a sphere tracer (160x120, voxels <= 0.5 px, tracer hit within 0.3 px)\n\n| scene | IoU | tracer hits missed | tracer hits |\n|---|---|---|---|"
+    );
+    let mb = fathom_core::presets::load("mandelbulb")?;
+    let mbox = scenes::mandelbox();
+    let cases = [
+        (
+            "menger",
+            scenes::menger(6),
+            zoom::preset("menger")?.camera(0, 2, 1.0),
+            2.0,
+        ),
+        ("mandelbulb", mb.clone(), mb.camera.clone(), 2.0),
+        ("mandelbox", mbox.clone(), mbox.camera.clone(), 4.0),
+    ];
+    for (name, scene, cam, half) in cases {
+        let cfg = ExplorerConfig {
+            width: 160,
+            height: 120,
+            fidelity: 0.5,
+            root_min: glam::DVec3::splat(-half),
+            root_size: 2.0 * half,
+            ..ExplorerConfig::default()
+        };
+        let ag = agreement(&scene, &cam, cfg, 0.3)?;
+        let _ = writeln!(
+            md,
+            "| {name} | {:.4} | {} | {} |",
+            ag.iou, ag.missed, ag.tracer_hits
+        );
+        res.outline.push((name.into(), ag));
+    }
+
+    // 5. Strict self-similarity at 1/3, 1/9, 1/27.
+    let _ = writeln!(
+        md,
+        "\n## Strict self-similarity of the Menger corner (320x240, settled)\n\n| pair | identical pixels | within 10% colour |\n|---|---|---|"
+    );
+    let p = zoom::preset("menger")?;
+    let Path::Zoom { target, dir, start } = p.path.clone() else {
+        return Err("menger preset is not a zoom".into());
+    };
+    let mut imgs = Vec::new();
+    for k in 0..4 {
+        let s = start / 3f64.powi(k) * 0.5;
+        let cam = fathom_core::Camera {
+            eye: target + dir * s,
+            target,
+            up: glam::DVec3::Y,
+            fov: p.fov,
+        };
+        let cfg = ExplorerConfig {
+            width: 320,
+            height: 240,
+            ..ExplorerConfig::default()
+        };
+        let mut ex = Explorer::new(&p.scene, cfg)?;
+        ex.settle(&cam, 200);
+        let (img, reqs, _) = ex.render(&cam);
+        ex.release_requests(&reqs);
+        imgs.push(img);
+    }
+    for k in 1..4 {
+        let (same, close) = similarity(&imgs[0], &imgs[k], 0.1);
+        let name = format!("1 vs 1/{}", 3u32.pow(k as u32));
+        let _ = writeln!(
+            md,
+            "| {name} | {:.1}% | {:.1}% |",
+            same * 100.0,
+            close * 100.0
+        );
+        res.self_similarity.push((name, same, close));
+    }
+
+    std::fs::write(a.out.join("report.md"), &md).map_err(|e| e.to_string())?;
+    std::fs::write(
+        a.out.join("results.json"),
+        serde_json::to_string_pretty(&res).map_err(|e| e.to_string())?,
+    )
+    .map_err(|e| e.to_string())?;
+    println!("{md}");
+    Ok(())
+}
