@@ -269,31 +269,26 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
 
 /// What `fathom` with no arguments does: render the default preset to ./fathom.png at
 /// 1280x720 and say where it went.
+impl RenderArgs {
+    /// The arguments of a bare `fathom render`, taken from the clap declarations so a new flag
+    /// needs no second default here.
+    pub fn defaults() -> RenderArgs {
+        #[derive(clap::Parser)]
+        struct Bare {
+            #[command(flatten)]
+            args: RenderArgs,
+        }
+        <Bare as clap::Parser>::parse_from(["render"]).args
+    }
+}
+
 pub fn run_default() -> Result<(), String> {
     let start = Instant::now();
     let a = RenderArgs {
-        scene: None,
-        preset: None,
         output: PathBuf::from("fathom.png"),
         size: (1280, 720),
-        eye: None,
-        target: None,
-        up: None,
-        fov: None,
-        threads: None,
-        tracer: TracerKind::Enhanced,
-        no_prepass: false,
-        supersample: 1,
-        ssao: 0.0,
-        mask: None,
-        depth: None,
-        steps: None,
-        stats: None,
         quiet: true,
-        gpu: false,
-        stereo: None,
-        eye_separation: 0.065,
-        renderer: crate::cmd_zoom::RendererKind::Trace,
+        ..RenderArgs::defaults()
     };
     run(a)?;
     let shown = std::fs::canonicalize("fathom.png").unwrap_or("fathom.png".into());
@@ -322,28 +317,11 @@ mod tests {
 
     fn args(output: &str, size: (u32, u32)) -> RenderArgs {
         RenderArgs {
-            scene: None,
-            preset: None,
             output: PathBuf::from(output),
             size,
-            eye: None,
-            target: None,
-            up: None,
-            fov: None,
             threads: Some(1),
-            tracer: TracerKind::Enhanced,
-            no_prepass: false,
-            supersample: 1,
-            ssao: 0.0,
-            mask: None,
-            depth: None,
-            steps: None,
-            stats: None,
             quiet: true,
-            gpu: false,
-            stereo: None,
-            eye_separation: 0.065,
-            renderer: crate::cmd_zoom::RendererKind::Trace,
+            ..RenderArgs::defaults()
         }
     }
 

@@ -210,14 +210,17 @@ fn icosahedral_solid<S: Real>(p: V3<S>, face: [f64; 3]) -> S {
     fold_icosahedral(p).dot(V3::c(face[0], face[1], face[2])) - S::splat(ICO_INRADIUS)
 }
 
-/// Icosahedral KIFS whose base solid is the unit icosahedron (faces along the 3-fold axes).
+/// Icosahedral KIFS over a base solid with icosahedral symmetry whose face normals are the
+/// orbit of `face`: `ICO_VERTEX` gives the dodecahedron (faces along the 5-fold axes),
+/// `DODECA_VERTEX` the icosahedron (faces along the 3-fold axes).
 #[inline(always)]
-pub(super) fn kifs_icosahedron<S: Real>(
+pub(super) fn kifs_icosahedral<S: Real>(
     p: V3<S>,
     iterations: usize,
     scale: S,
     offset: V3<S>,
     rot: [V3<S>; 3],
+    face: [f64; 3],
 ) -> (S, S) {
     let rotate = rotator(rot);
     ifs_loop(
@@ -225,26 +228,7 @@ pub(super) fn kifs_icosahedron<S: Real>(
         iterations,
         scale,
         |z| scale_about(rotate(fold_icosahedral(z)), scale, offset),
-        |z| icosahedral_solid(z, DODECA_VERTEX),
-    )
-}
-
-/// Icosahedral KIFS whose base solid is the unit dodecahedron (faces along the 5-fold axes).
-#[inline(always)]
-pub(super) fn kifs_dodecahedron<S: Real>(
-    p: V3<S>,
-    iterations: usize,
-    scale: S,
-    offset: V3<S>,
-    rot: [V3<S>; 3],
-) -> (S, S) {
-    let rotate = rotator(rot);
-    ifs_loop(
-        p,
-        iterations,
-        scale,
-        |z| scale_about(rotate(fold_icosahedral(z)), scale, offset),
-        |z| icosahedral_solid(z, ICO_VERTEX),
+        |z| icosahedral_solid(z, face),
     )
 }
 

@@ -126,7 +126,7 @@ crate::declare_family! {
         offset: Vec3 = [0.5257311121191336, 0.0, 0.8506508083520399], [-OFFSET_MAX, OFFSET_MAX], "point the copies scale towards",
         rotation: Vec3 = [0.0, 0.0, 0.0], [-360.0, 360.0], "Euler angles (degrees) applied each iteration",
     ) baked(ifs::bake_kifs) (iterations: Int, scale: Scalar, offset: Vec3, r0: Vec3, r1: Vec3, r2: Vec3)
-        => ifs::kifs_icosahedron(p, iterations, scale, offset, [r0, r1, r2]);
+        => ifs::kifs_icosahedral(p, iterations, scale, offset, [r0, r1, r2], ifs::DODECA_VERTEX);
 
     /// Knighty's kaleidoscopic IFS with icosahedral symmetry whose copies sit at the vertices of
     /// a dodecahedron; the estimate is the distance bound of the unit dodecahedron divided by
@@ -138,5 +138,5 @@ crate::declare_family! {
         offset: Vec3 = [0.0, 0.35682208977308993, 0.9341723589627157], [-OFFSET_MAX, OFFSET_MAX], "point the copies scale towards",
         rotation: Vec3 = [0.0, 0.0, 0.0], [-360.0, 360.0], "Euler angles (degrees) applied each iteration",
     ) baked(ifs::bake_kifs) (iterations: Int, scale: Scalar, offset: Vec3, r0: Vec3, r1: Vec3, r2: Vec3)
-        => ifs::kifs_dodecahedron(p, iterations, scale, offset, [r0, r1, r2]);
+        => ifs::kifs_icosahedral(p, iterations, scale, offset, [r0, r1, r2], ifs::ICO_VERTEX);
 }
