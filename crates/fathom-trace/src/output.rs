@@ -47,18 +47,45 @@ pub fn save_steps(frame: &Frame, file: File, path: &Path) -> Result<(), String> 
     write_png(file, path, frame.width, frame.height, &rgb)
 }
 
-/// Ray distance per pixel as a float EXR (all three channels equal); misses are written as
-/// `far` (the scene's maximum distance) so no infinity reaches the file.
+/// Ray distance per pixel as a float EXR: RGB hold the distance along the primary ray, alpha
+/// the coverage (1 where the ray hit, 0 where it missed). Misses carry `far` (the scene's
+/// maximum distance) in RGB so no infinity reaches the file, and alpha 0 tells a compositor
+/// they are background, not a surface at `far`.
 pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<(), String> {
-    let data: Vec<f32> = frame
-        .depth
-        .iter()
-        .flat_map(|&d| [if d.is_finite() { d } else { far }; 3])
+    let data: Vec<f32> = (0..frame.len())
+        .flat_map(|i| {
+            let d = frame.depth[i];
+            if frame.is_hit(i) {
+                [d, d, d, 1.0]
+            } else {
+                [far, far, far, 0.0]
+            }
+        })
         .collect();
-    let img = image::Rgb32FImage::from_raw(frame.width, frame.height, data)
+    let img = image::Rgba32FImage::from_raw(frame.width, frame.height, data)
         .ok_or("depth buffer has the wrong size")?;
     let mut w = BufWriter::new(file);
-    image::DynamicImage::ImageRgb32F(img)
+    image::DynamicImage::ImageRgba32F(img)
         .write_to(&mut w, image::ImageFormat::OpenExr)
         .map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_exr_keeps_hits_and_marks_misses_in_alpha() {
+        let mut frame = Frame::new(2, 1);
+        frame.depth[0] = 2.5;
+        frame.depth[1] = f32::INFINITY;
+        let dir = std::env::temp_dir().join(format!("fathom-depth-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("d.exr");
+        save_depth(&frame, 20.0, open_output(&path).unwrap(), &path).unwrap();
+        let img = image::open(&path).unwrap().to_rgba32f();
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(img.get_pixel(0, 0).0, [2.5, 2.5, 2.5, 1.0]);
+        assert_eq!(img.get_pixel(1, 0).0, [20.0, 20.0, 20.0, 0.0]);
+    }
 }
