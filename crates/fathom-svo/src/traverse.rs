@@ -165,9 +165,16 @@ fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
         b.min[axis].next_down()
     };
     // Built component by component (no indexed store into an array that is then read whole:
-    // that stalls store forwarding in this hot loop).
+    // that stalls store forwarding in this hot loop). The other coordinates are clamped into
+    // this box: at an edge the exit distance equals `t`, and `o + t d` rounded can land on the
+    // far side of a face the ray already crossed; without the clamp two leaves at an edge sent
+    // the ray back and forth until the step guard declared a miss (seen at zoom 1e11).
     let c = |a: usize| {
-        if a == axis { face } else { r.o[a] + t * r.d[a] }
+        if a == axis {
+            face
+        } else {
+            (r.o[a] + t * r.d[a]).clamp(b.min[a], (b.min[a] + s).next_down())
+        }
     };
     let p = [c(0), c(1), c(2)];
     (t, 2 * axis + pos as usize, p)
