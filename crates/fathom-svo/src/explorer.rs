@@ -17,6 +17,7 @@ use crate::evict::unify;
 use crate::generate::{Children, Outcome, Shader, apply, eval_children, init_root};
 use crate::node::{NONE, REQUESTED, pack_rgb};
 use crate::octree::{BoxU, Octree};
+use crate::root::RootSpec;
 use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
 use fathom_core::eval::Evaluator;
 use fathom_core::scene::Scene;
@@ -63,10 +64,8 @@ pub struct ExplorerConfig {
     pub subdivide_ms: f64,
     /// Subdivisions done each frame whatever the time.
     pub min_subdivisions: usize,
-    /// World cube the root spans: minimum corner and side (a power of two is best).
-    pub root_min: DVec3,
-    /// Side of the root cube.
-    pub root_size: f64,
+    /// The root cube: fitted to the scene (default) or explicit.
+    pub root: RootSpec,
 }
 
 impl Default for ExplorerConfig {
@@ -78,14 +77,16 @@ impl Default for ExplorerConfig {
             threads: 2,
             brick_period: 3,
             keep_levels: 3,
-            unify_every: 8,
+            // Every 4 frames: often enough that the bricks the zoom has left behind are
+            // unloaded before the next levels fill in (the node count plateaus), rarely
+            // enough that the unification walk stays a small share of the frame.
+            unify_every: 4,
             max_memory: 1 << 30,
             margin: crate::generate::DEFAULT_MARGIN,
             traversal: Traversal::Neighbour,
             subdivide_ms: 12.0,
             min_subdivisions: 256,
-            root_min: DVec3::splat(-2.0),
-            root_size: 4.0,
+            root: RootSpec::default(),
         }
     }
 }
@@ -127,10 +128,7 @@ impl ExplorerConfig {
         if !(self.subdivide_ms.is_finite() && self.subdivide_ms >= 0.0) {
             return Err("subdivision budget must be a non-negative number of ms".into());
         }
-        if !(self.root_size.is_finite() && self.root_size > 0.0 && self.root_min.is_finite()) {
-            return Err("the root cube must be finite with a positive side".into());
-        }
-        Ok(())
+        self.root.validate()
     }
 }
 
@@ -251,12 +249,13 @@ impl Explorer {
         cfg.validate()?;
         let shader = Shader::new(scene, cfg.margin)?;
         let max_nodes = cfg.max_memory / std::mem::size_of::<crate::node::Node>();
-        let mut tree = Octree::new(cfg.root_min, cfg.root_size, cfg.brick_period, max_nodes);
-        init_root(&mut tree, &shader);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(cfg.threads)
             .build()
             .map_err(|e| format!("cannot start {} threads: {e}", cfg.threads))?;
+        let (root_min, root_size) = pool.install(|| cfg.root.resolve(&shader));
+        let mut tree = Octree::new(root_min, root_size, cfg.brick_period, max_nodes);
+        init_root(&mut tree, &shader);
         Ok(Explorer {
             tree,
             shader,
@@ -363,10 +362,12 @@ impl Explorer {
                 .map(|(y, (crow, drow))| {
                     let mut reqs = Vec::new();
                     let mut c = [0u64; 3];
+                    // Where the previous ray of this row entered the root (eye outside).
+                    let mut entry = None;
                     for x in 0..w as usize {
                         let d = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
                         let ray = Ray::new(o, [d.x, d.y, d.z], lod);
-                        let hit = cast(tree, &ray, skip, trav, &mut reqs);
+                        let hit = cast(tree, &ray, skip, &mut entry, trav, &mut reqs);
                         c[0] += 1;
                         c[2] += hit.steps as u64;
                         if hit.is_hit() {
@@ -530,11 +531,12 @@ fn cast(
     tree: &Octree,
     ray: &Ray,
     skip: Option<(u32, BoxU)>,
+    entry: &mut Option<(u32, BoxU)>,
     trav: Traversal,
     reqs: &mut Vec<Request>,
 ) -> Hit {
     match trav {
-        Traversal::Neighbour => cast_neighbour(tree, ray, skip, reqs),
+        Traversal::Neighbour => cast_neighbour(tree, ray, skip, entry, reqs),
         Traversal::KdRestart => cast_kdrestart(tree, ray, skip.is_some(), reqs),
     }
 }

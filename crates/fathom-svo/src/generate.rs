@@ -7,11 +7,22 @@
 //! (never larger than the true distance) a voxel the surface crosses always tests full: no
 //! false negatives. The margin absorbs floating-point error in the estimator (the
 //! dissertation's Menger holes came from testing without one).
+//!
+//! Estimates that are not bounds (the scene uses an operator of quality `Safety`: the
+//! Mandelbulb, the Mandelbox, twists) get a second test: a voxel is also full when one of its
+//! 8 corners is inside (distance <= 0). The Mandelbulb's estimate is 0 inside the set of points
+//! that do not escape in its 12 iterations but about 7e-7 just outside it (it estimates the
+//! distance to the limit set, not to that set), so below that size a voxel the set's boundary
+//! crosses tested empty whenever its centre was outside: past zoom ~1e6 the surface at the
+//! zoom target vanished and rays hit structure 100x further away. Where the boundary is
+//! locally a plane, a voxel it crosses has a corner on each side, so the corner test catches
+//! it. The corners of the 8 children are the parent's 3x3x3 lattice, evaluated lazily.
 
 use crate::evict::free_children;
 use crate::node::{EMPTY, NONE, REQUESTED, VISITED, pack_rgb};
 use crate::octree::{BoxU, Octree};
 use fathom_core::eval::Evaluator;
+use fathom_core::registry::{Family, Quality};
 use fathom_core::scene::Scene;
 use fathom_core::{Tape, V3};
 use glam::DVec3;
@@ -30,6 +41,20 @@ pub struct Shader {
     palette: [[f64; 3]; 4],
     /// Colour voxels by the DE gradient (lambert) on top of the orbit-trap colour.
     pub gradient_shading: bool,
+    /// The distance is an estimate, not a bound: voxels with a corner inside are full too.
+    pub corner_test: bool,
+}
+
+/// True when every shape, operator and combination of `scene` declares an exact distance or a
+/// bound (no `Safety` estimates).
+pub fn is_bound(scene: &Scene) -> bool {
+    fn ok<K: Family>(c: &fathom_core::Call<K>) -> bool {
+        c.kind.def().quality != Quality::Safety
+    }
+    fn node(n: &fathom_core::Node) -> bool {
+        ok(&n.shape) && ok(&n.combine) && n.ops.iter().all(ok) && n.children.iter().all(node)
+    }
+    node(&scene.root) && scene.ifs.as_ref().is_none_or(|i| i.ops.iter().all(ok))
 }
 
 impl Shader {
@@ -49,6 +74,7 @@ impl Shader {
             ambient: scene.render.ambient.clamp(0.0, 1.0).max(0.25),
             palette: scene.render.palette,
             gradient_shading: true,
+            corner_test: !is_bound(scene),
         })
     }
 
@@ -62,13 +88,19 @@ impl Shader {
         hd: f64,
     ) -> Option<fathom_core::Value<f64>> {
         let v = ev.eval(&self.tape, V3::new(c.x, c.y, c.z));
-        let slack = 8.0 * f64::EPSILON * c.abs().max_element().max(1.0);
-        // NaN counts as full: never a false negative.
-        if v.d.is_nan() || v.d < hd * (1.0 + self.margin) + slack {
+        if self.full_value(&v, c, hd) {
             Some(v)
         } else {
             None
         }
+    }
+
+    /// The full test on an evaluated value `v` at world centre `c` (half-diagonal `hd`).
+    #[inline]
+    pub fn full_value(&self, v: &fathom_core::Value<f64>, c: DVec3, hd: f64) -> bool {
+        let slack = 8.0 * f64::EPSILON * c.abs().max_element().max(1.0);
+        // NaN counts as full: never a false negative.
+        v.d.is_nan() || v.d < hd * (1.0 + self.margin) + slack
     }
 
     /// Colour of a full voxel at world centre `c` (half side `h`) with value `v`.
@@ -131,10 +163,33 @@ pub fn eval_children(
     };
     let side = b.dim() * 0.5 * tree.root_size;
     let hd = side * 0.5 * 3f64.sqrt();
+    // Inside flags of the parent's 3x3x3 lattice (the children's corners), filled on demand.
+    let mut lattice = [None::<bool>; 27];
+    let h = b.dim() * 0.5;
     for o in 0..8 {
         let cb = b.child(o);
         let c = tree.centre_world(&cb);
-        if let Some(v) = sh.full(ev, c, hd) {
+        let v = ev.eval(&sh.tape, V3::new(c.x, c.y, c.z));
+        let mut full = sh.full_value(&v, c, hd);
+        if !full && sh.corner_test {
+            full = (0..8).any(|k| {
+                let ijk = [0, 1, 2].map(|a| (o >> a & 1) + (k >> a & 1));
+                *lattice[ijk[0] + 3 * ijk[1] + 9 * ijk[2]].get_or_insert_with(|| {
+                    let u = DVec3::new(
+                        b.min[0] + h * ijk[0] as f64,
+                        b.min[1] + h * ijk[1] as f64,
+                        b.min[2] + h * ijk[2] as f64,
+                    );
+                    let p = tree.root_min + u * tree.root_size;
+                    {
+                        // Inside, or NaN (never a false negative).
+                        let d = ev.distance(&sh.tape, V3::new(p.x, p.y, p.z));
+                        d <= 0.0 || d.is_nan()
+                    }
+                })
+            });
+        }
+        if full {
             out.full |= 1 << o;
             out.colours[o] = sh.colour(ev, c, side * 0.5, &v);
         }

@@ -6,6 +6,7 @@
 //!
 //! - [`node`]: the arena node (44 bytes) and its flags;
 //! - [`octree`]: the arena of nodes, free list of child blocks, boxes and counts;
+//! - [`root`]: the root cube, fitted to the scene's bounds or given;
 //! - [`generate`]: the conservative full test, subdivision and recombination;
 //! - [`traverse`]: neighbour traversal with skip node and link optimisation, kd-restart;
 //! - [`evict`]: bricks, visited flags, NRU unification with link repair;
@@ -26,6 +27,7 @@ pub mod generate;
 pub mod node;
 pub mod octree;
 pub mod outline;
+pub mod root;
 pub mod scenes;
 pub mod stats;
 pub mod traverse;
@@ -33,6 +35,7 @@ pub mod zoom;
 
 pub use explorer::{Explorer, ExplorerConfig, FrameStats, SvoImage, Traversal};
 pub use octree::Octree;
+pub use root::RootSpec;
 
 #[cfg(test)]
 mod tests;

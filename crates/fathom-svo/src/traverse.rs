@@ -13,7 +13,8 @@
 //! the exit face's link (a same-or-coarser node), climbs while the point is outside the box or
 //! the parent already satisfies the LOD test (corner cases and LOD agreement), then descends.
 //! The first leaf is the skip node (the leaf containing the eye), so a ray never descends from
-//! the root when the eye is inside it. When a link pointed to a coarser node, the deepest node
+//! the root when the eye is inside it; with the eye outside the root, the first leaf is found
+//! from the previous ray's entry node (see [`cast_neighbour`]). When a link pointed to a coarser node, the deepest node
 //! of the descent no deeper than the link's owner replaces it (an atomic store: any valid link
 //! is correct, a better one only saves steps).
 
@@ -92,6 +93,7 @@ pub struct Request {
 pub type Start = Option<(u32, BoxU)>;
 
 /// Entry distance into the root and the point just inside it, or `None` when the ray misses.
+/// Uses the ray's reciprocal direction (no divisions).
 fn enter_root(r: &Ray) -> Option<(f64, [f64; 3])> {
     let mut t0 = 0.0f64;
     let mut t1 = f64::INFINITY;
@@ -103,11 +105,9 @@ fn enter_root(r: &Ray) -> Option<(f64, [f64; 3])> {
             }
             continue;
         }
-        let (n, f) = if r.d[a] > 0.0 {
-            (-r.o[a] / r.d[a], (1.0 - r.o[a]) / r.d[a])
-        } else {
-            ((1.0 - r.o[a]) / r.d[a], -r.o[a] / r.d[a])
-        };
+        let lo = -r.o[a] * r.inv[a];
+        let hi = (1.0 - r.o[a]) * r.inv[a];
+        let (n, f) = if r.d[a] > 0.0 { (lo, hi) } else { (hi, lo) };
         if n > t0 {
             t0 = n;
             axis = a;
@@ -165,9 +165,16 @@ fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
         b.min[axis].next_down()
     };
     // Built component by component (no indexed store into an array that is then read whole:
-    // that stalls store forwarding in this hot loop).
+    // that stalls store forwarding in this hot loop). The other coordinates are clamped into
+    // this box: at an edge the exit distance equals `t`, and `o + t d` rounded can land on the
+    // far side of a face the ray already crossed; without the clamp two leaves at an edge sent
+    // the ray back and forth until the step guard declared a miss (seen at zoom 1e11).
     let c = |a: usize| {
-        if a == axis { face } else { r.o[a] + t * r.d[a] }
+        if a == axis {
+            face
+        } else {
+            (r.o[a] + t * r.d[a]).clamp(b.min[a], (b.min[a] + s).next_down())
+        }
     };
     let p = [c(0), c(1), c(2)];
     (t, 2 * axis + pos as usize, p)
@@ -176,6 +183,7 @@ fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
 /// The leaf (or LOD-terminating inner node) handling shared by both traversals. Returns the
 /// hit when the ray stops here.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn stop_here(
     tree: &Octree,
     id: u32,
@@ -183,10 +191,16 @@ fn stop_here(
     t: f64,
     lod: f64,
     steps: u32,
+    last_brick: &mut u32,
     reqs: &mut Vec<Request>,
 ) -> Option<Hit> {
     let n = &tree.nodes[id as usize];
-    mark_visited(tree, id);
+    // Leaves of one brick share its whole chain of enclosing bricks: mark it once per change
+    // of brick along the ray, not at every leaf.
+    if n.brick != *last_brick {
+        *last_brick = n.brick;
+        mark_visited(tree, id);
+    }
     if n.is_empty() {
         return None;
     }
@@ -201,17 +215,33 @@ fn stop_here(
     })
 }
 
-/// Neighbour traversal from the skip node (`start`, the leaf containing the eye; `None` when
-/// the eye is outside the root: one descent from the root then).
-pub fn cast_neighbour(tree: &Octree, r: &Ray, start: Start, reqs: &mut Vec<Request>) -> Hit {
+/// Neighbour traversal from the skip node (`start`, the leaf containing the eye). When the
+/// eye is outside the root (`start` is `None`), the ray enters through the root's boundary and
+/// its first leaf is found by climbing from `entry` (the node where the previous ray of this
+/// worker entered, updated here) to the first node containing the entry point, then
+/// descending: neighbouring rays enter through the same or nearby leaves, so this costs a step
+/// or two instead of a descent from the root. The leaf found is the same either way.
+pub fn cast_neighbour(
+    tree: &Octree,
+    r: &Ray,
+    start: Start,
+    entry: &mut Start,
+    reqs: &mut Vec<Request>,
+) -> Hit {
     let nodes = &tree.nodes;
+    let outside = start.is_none();
     let (mut id, mut b, mut t, mut p) = match start {
         Some((id, b)) => (id, b, 0.0, r.o),
         None => match enter_root(r) {
-            Some((t, p)) => (0, BoxU::ROOT, t, p),
+            Some((t, p)) => match *entry {
+                Some((id, b)) => (id, b, t, p),
+                None => (0, BoxU::ROOT, t, p),
+            },
             None => return Hit::miss(0),
         },
     };
+    let mut first = outside;
+    let mut last_brick = NONE;
     let lod = r.lod;
     let mut steps = 1u32;
     // Link to improve: (owner, face, owner depth, link target).
@@ -238,6 +268,9 @@ pub fn cast_neighbour(tree: &Octree, r: &Ray, start: Start, reqs: &mut Vec<Reque
                 break;
             }
             if b.dim() < t * lod {
+                if first {
+                    *entry = Some((id, b));
+                }
                 mark_visited(tree, id);
                 return Hit {
                     t,
@@ -263,7 +296,11 @@ pub fn cast_neighbour(tree: &Octree, r: &Ray, start: Start, reqs: &mut Vec<Reque
         {
             nodes[owner as usize].set_link(f, id);
         }
-        if let Some(h) = stop_here(tree, id, &b, t, lod, steps, reqs) {
+        if first {
+            *entry = Some((id, b));
+            first = false;
+        }
+        if let Some(h) = stop_here(tree, id, &b, t, lod, steps, &mut last_brick, reqs) {
             return h;
         }
         if steps > MAX_STEPS {
@@ -310,6 +347,7 @@ pub fn cast_kdrestart(tree: &Octree, r: &Ray, eye_inside: bool, reqs: &mut Vec<R
     };
     let lod = r.lod;
     let mut steps = 0u32;
+    let mut last_brick = NONE;
     loop {
         let mut b = BoxU::ROOT;
         if !b.contains(p) {
@@ -336,7 +374,7 @@ pub fn cast_kdrestart(tree: &Octree, r: &Ray, eye_inside: bool, reqs: &mut Vec<R
             b = b.child(o);
             steps += 1;
         }
-        if let Some(h) = stop_here(tree, id, &b, t, lod, steps, reqs) {
+        if let Some(h) = stop_here(tree, id, &b, t, lod, steps, &mut last_brick, reqs) {
             return h;
         }
         if steps > MAX_STEPS {

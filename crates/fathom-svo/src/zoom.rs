@@ -3,6 +3,7 @@
 //! stops a zoom cleanly at the limit of f64 precision.
 
 use crate::octree::MAX_DEPTH;
+use crate::root::RootSpec;
 use crate::scenes;
 use fathom_core::eval::Evaluator;
 use fathom_core::scene::Scene;
@@ -39,7 +40,18 @@ pub struct ZoomPreset {
     pub fov: f64,
     /// The camera path.
     pub path: Path,
+    /// The octree's root cube.
+    pub root: RootSpec,
 }
+
+/// The Menger sponge's own cube, `[-1, 1]^3`, as the root of its zooms: exact, so the root's
+/// faces are the sponge's faces and the zoom target (the corner) is a corner of the root. A
+/// fitted root only reaches about +-1.016 (one search cell of padding), which shifts every
+/// voxel boundary off the sponge's faces and costs many more nodes per ray.
+pub const MENGER_CUBE: RootSpec = RootSpec::Cube {
+    centre: DVec3::ZERO,
+    half: 1.0,
+};
 
 /// Names accepted by [`preset`].
 pub const PRESETS: &[&str] = &["menger", "mandelbulb", "menger-tour"];
@@ -59,14 +71,14 @@ pub fn preset(name: &str) -> Result<ZoomPreset, String> {
                 dir: DVec3::new(1.0, 0.8, 0.6).normalize(),
                 start: 1.5,
             },
+            root: MENGER_CUBE,
         }),
         "mandelbulb" => {
             let scene = fathom_core::presets::load("mandelbulb")?;
             let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;
             let eye = scene.camera.eye;
-            let aim = DVec3::new(0.25, 0.3, 0.0);
-            let target = surface_point(&tape, eye, (aim - eye).normalize())
-                .ok_or("the Mandelbulb zoom ray missed the surface")?;
+            let target = view_target(&tape, &scene.camera)
+                .ok_or("the Mandelbulb zoom found no surface in the preset's view")?;
             Ok(ZoomPreset {
                 name: "mandelbulb",
                 fov: scene.camera.fov,
@@ -75,6 +87,7 @@ pub fn preset(name: &str) -> Result<ZoomPreset, String> {
                     dir: (eye - target).normalize(),
                     start: (eye - target).length(),
                 },
+                root: RootSpec::default(),
                 scene,
             })
         }
@@ -94,6 +107,7 @@ pub fn preset(name: &str) -> Result<ZoomPreset, String> {
                     (DVec3::new(0.05, 0.0, -0.4), DVec3::new(0.3, 0.0, -1.2)),
                 ],
             },
+            root: MENGER_CUBE,
         }),
         _ => Err(fathom_core::call_serde::unknown_name(
             "zoom preset",
@@ -103,22 +117,84 @@ pub fn preset(name: &str) -> Result<ZoomPreset, String> {
     }
 }
 
-/// Sphere-traces from `eye` along `dir` to within 1e-15 of the surface (f64 path).
+/// The zoom target of a scene's view, independent of the view's pose: the surface point of the
+/// camera's centre ray, or, if that misses, of the first ray that hits on a spiral of image
+/// points around the centre.
+pub fn view_target(tape: &Tape, cam: &Camera) -> Option<DVec3> {
+    let f = cam.frame();
+    (0..64).find_map(|i| {
+        // Golden-angle spiral over the middle of a 1x1 image.
+        let r = 0.4 * (i as f64 / 64.0).sqrt();
+        let a = i as f64 * 2.399_963_229_728_653;
+        let d = f.ray_dir(0.5 + r * a.cos(), 0.5 + r * a.sin(), 1, 1);
+        surface_point(tape, cam.eye, d)
+    })
+}
+
+/// The point where the ray from `eye` along unit `dir` first reaches the surface, to f64
+/// precision, on the outside: sphere tracing with half steps (the Mandelbulb's estimator is
+/// an estimate and full steps can overshoot into the set), then bisection between the last
+/// point outside (distance > 0) and the first point inside (distance <= 0) until they are
+/// neighbouring floats along the ray. Returns the outside point, so every point of the ray
+/// before it (where the eye of a zoom into it travels) was stepped over as outside.
 pub fn surface_point(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> {
     let mut ev = Evaluator::<f64>::new();
-    let mut t = 0.0;
-    for _ in 0..100_000 {
+    let mut dist = |t: f64| {
         let p = eye + dir * t;
-        let d = ev.distance(tape, V3::new(p.x, p.y, p.z));
-        if d < 1e-15 {
-            return Some(p);
-        }
-        t += d;
-        if t > 100.0 {
+        ev.distance(tape, V3::new(p.x, p.y, p.z))
+    };
+    let outside = |d: f64| d > 0.0; // NaN counts as inside
+    if !outside(dist(0.0)) {
+        return None;
+    }
+    // 1. Half steps until the step no longer moves t or a step lands inside.
+    let mut lo = 0.0f64;
+    let mut hi = None;
+    for _ in 0..200_000 {
+        let d = dist(lo);
+        let next = lo + 0.5 * d;
+        if next > 100.0 {
             return None;
         }
+        if next == lo {
+            break;
+        }
+        if !outside(dist(next)) {
+            hi = Some(next);
+            break;
+        }
+        lo = next;
     }
-    None
+    // 2. Find a point inside just beyond `lo`: grow a step from one ulp.
+    let hi = match hi {
+        Some(h) => h,
+        None => {
+            let mut s = lo.max(1e-300) * f64::EPSILON;
+            loop {
+                if !outside(dist(lo + s)) {
+                    break lo + s;
+                }
+                s *= 2.0;
+                if s > 1e-6 {
+                    return None;
+                }
+            }
+        }
+    };
+    // 3. Bisection down to neighbouring floats.
+    let mut hi = hi;
+    loop {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if outside(dist(mid)) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(eye + dir * lo)
 }
 
 impl ZoomPreset {
@@ -233,12 +309,55 @@ mod tests {
     }
 
     #[test]
-    fn mandelbulb_target_is_on_the_surface() {
+    fn mandelbulb_target_is_on_the_surface_and_the_eye_stays_outside() {
         let p = preset("mandelbulb").unwrap();
-        let Path::Zoom { target, .. } = p.path else {
+        let Path::Zoom { target, dir, start } = p.path else {
             panic!()
         };
         let tape = Tape::compile(&p.scene).unwrap();
-        assert!(tape.eval_f64([target.x, target.y, target.z]).d.abs() < 1e-12);
+        let d = |q: DVec3| tape.eval_f64([q.x, q.y, q.z]).d;
+        // Outside, and a few ulps further along the view is inside: the target is on the
+        // surface to f64 precision. (The estimator's set is the points that do not escape in
+        // 12 iterations; just outside it the estimate is ~7e-7, inside it is 0, so "on the
+        // surface" means bracketed, not a distance near 0.)
+        let eps = 4.0 * f64::EPSILON * target.abs().max_element().max(1.0);
+        assert!(d(target) > 0.0, "target inside: {}", d(target));
+        assert!(
+            d(target) < 1e-5,
+            "target {} far from the surface",
+            d(target)
+        );
+        assert!(
+            d(target - dir * eps) <= 0.0,
+            "no inside point within 4 ulps beyond the target"
+        );
+        assert!(start > 0.5);
+        // The zoom's eye stays outside at every frame of a zoom to 1e13 (past the precision
+        // limit of 640x480, where `fathom zoom` stops).
+        let frames = 600;
+        for i in 0..frames {
+            let eye = p.camera(i, frames, 1e13).eye;
+            assert!(
+                d(eye) > 0.0,
+                "frame {i}: eye inside at zoom {:.2e}",
+                p.zoom_at(i, frames, 1e13)
+            );
+        }
+    }
+
+    #[test]
+    fn surface_points_are_bracketed_to_f64_precision() {
+        // A sphere of radius 1, approached head on and at a grazing angle.
+        let tape = Tape::compile(&scenes::sphere(1.0)).unwrap();
+        for (eye, dir) in [
+            (DVec3::new(0.0, 0.0, 3.0), DVec3::NEG_Z),
+            (DVec3::new(0.0, 0.999, 3.0), DVec3::NEG_Z),
+        ] {
+            let q = surface_point(&tape, eye, dir).unwrap();
+            let r = q.length();
+            assert!(r > 1.0 - 1e-15 && r < 1.0 + 1e-14, "{r}");
+            assert!(tape.eval_f64([q.x, q.y, q.z]).d > 0.0);
+        }
+        assert!(surface_point(&tape, DVec3::new(0.0, 2.0, 3.0), DVec3::NEG_Z).is_none());
     }
 }

@@ -304,8 +304,7 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
             width: 160,
             height: 120,
             fidelity: 0.5,
-            root_min: glam::DVec3::splat(-half),
-            root_size: 2.0 * half,
+            root: fathom_svo::RootSpec::centred(half),
             ..ExplorerConfig::default()
         };
         let ag = agreement(&scene, &cam, cfg, 0.3)?;
@@ -338,6 +337,7 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
         let cfg = ExplorerConfig {
             width: 320,
             height: 240,
+            root: p.root,
             ..ExplorerConfig::default()
         };
         let mut ex = Explorer::new(&p.scene, cfg)?;

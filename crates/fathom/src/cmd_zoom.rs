@@ -77,8 +77,8 @@ pub enum RendererKind {
     Svo,
 }
 
-/// `fathom render --renderer svo`: settles an octree at the scene's camera (root cube
-/// [-4, 4]^3), renders it, applies the shared post effects (fog from the scene, `--ssao`) and
+/// `fathom render --renderer svo`: settles an octree at the scene's camera (root cube fitted
+/// to the scene inside [-4, 4]^3), renders it, applies the shared post effects (fog from the scene, `--ssao`) and
 /// writes the PNG (and the mask if asked).
 pub fn render_still(
     scene: &fathom_core::Scene,
@@ -89,8 +89,7 @@ pub fn render_still(
         width,
         height,
         threads: a.threads.unwrap_or(2),
-        root_min: glam::DVec3::splat(-4.0),
-        root_size: 8.0,
+        root: fathom_svo::RootSpec::Fit { half: 4.0 },
         ..ExplorerConfig::default()
     };
     let out = fathom_trace::output::open_output(&a.output)?;
@@ -202,6 +201,7 @@ pub fn setup(a: &ZoomArgs) -> Result<(ZoomPreset, ExplorerConfig), String> {
         max_memory,
         traversal: a.traversal.into(),
         subdivide_ms: a.subdivide_ms,
+        root: p.root,
         ..ExplorerConfig::default()
     };
     cfg.validate()?;
@@ -225,7 +225,7 @@ pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
         if let Path::Zoom { target, .. } = &p.path {
             let pa = cam.frame().pixel_angle(cfg.height);
             let dist = (cam.eye - *target).length();
-            if let Err(e) = zoom::precision_check(dist, cfg.root_size, pa, cfg.fidelity, z) {
+            if let Err(e) = zoom::precision_check(dist, ex.tree.root_size, pa, cfg.fidelity, z) {
                 stopped = Some(e);
                 break;
             }
