@@ -8,7 +8,8 @@ use crate::shader;
 use fathom_core::limits;
 use fathom_core::tape::Tape;
 
-pub use crate::passes::{Projection, RenderOptions, RenderStats};
+pub use crate::passes::{RenderOptions, RenderStats};
+pub use fathom_core::Projection;
 
 /// Bytes of one material in the GPU table: albedo + specular, shininess + trap colour + 2 pad.
 pub(crate) const MATERIAL_BYTES: u64 = 32;
