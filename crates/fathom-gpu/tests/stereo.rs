@@ -153,7 +153,9 @@ fn ods_frame_wraps_around_without_a_seam() {
 #[test]
 fn ods_frame_of_a_preset_matches_the_cpu_tracer() {
     let mut r = renderer();
-    let scene = fathom_core::presets::load("menger").unwrap();
+    let mut scene = fathom_core::presets::load("menger").unwrap();
+    // Close to the sponge, so that it fills a good part of the panorama.
+    scene.camera.eye = glam::DVec3::new(0.6, 0.5, 1.7);
     let (w, h) = (128u32, 64u32);
     let projection = Projection::Ods {
         eye_separation: 0.2,
@@ -182,6 +184,6 @@ fn ods_frame_of_a_preset_matches_the_cpu_tracer() {
     );
     eprintln!("menger ODS {w}x{h} per eye: {report}");
     // The same threshold as the mono preset agreement test.
-    assert!(hits > 100, "the preset is in view: {report}");
+    assert!(hits > c.len() / 10, "the preset fills the view: {report}");
     assert!(same >= 0.99 && hit_bad == 0, "{report}");
 }
