@@ -1,5 +1,7 @@
 //! The pinhole camera shared by every renderer: an f64 eye (deep zooms live in the last bits of
-//! the position), a look-at target, an up vector and a vertical field of view.
+//! the position), a look-at target, an up vector and a vertical field of view; and the
+//! [`Projection`]s (mono, side-by-side stereo, omni-directional stereo) whose ray generation
+//! every renderer uses, defined here once in f64 (the WGSL of fathom-gpu mirrors it).
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -94,6 +96,160 @@ impl CameraFrame {
     }
 }
 
+/// How the rays leave the camera: one view, or a stereo pair laid out in one image.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Projection {
+    /// One pinhole view.
+    #[default]
+    Mono,
+    /// Two parallel pinhole views side by side (output twice as wide), eyes `eye_separation`
+    /// apart along the camera's right axis, left eye on the left.
+    SideBySide { eye_separation: f64 },
+    /// Omni-directional stereo, equirectangular (longitude -180..180 degrees across, latitude
+    /// 90..-90 down), left eye on top (output twice as tall). Each ray leaves from the point of
+    /// the viewing circle of diameter `eye_separation` (in the camera's horizontal plane) where
+    /// it is tangent to that circle; each eye's view should be 2:1.
+    Ods { eye_separation: f64 },
+}
+
+/// The largest eye separation accepted, in scene units.
+pub const MAX_EYE_SEPARATION: f64 = 1e6;
+
+impl Projection {
+    /// Checks the eye separation.
+    pub fn validate(self) -> Result<(), String> {
+        let sep = self.separation();
+        if !(sep.is_finite() && (0.0..=MAX_EYE_SEPARATION).contains(&sep)) {
+            return Err(format!(
+                "eye separation = {sep} is out of range [0, {MAX_EYE_SEPARATION}] (scene units)"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The distance between the eyes (0 for mono).
+    pub fn separation(self) -> f64 {
+        match self {
+            Projection::Mono => 0.0,
+            Projection::SideBySide { eye_separation } | Projection::Ods { eye_separation } => {
+                eye_separation
+            }
+        }
+    }
+
+    /// Number of views: 1 or 2.
+    pub fn eyes(self) -> u32 {
+        if self == Projection::Mono { 1 } else { 2 }
+    }
+
+    /// Output size for a per-eye view of `w` x `h`.
+    pub fn output_size(self, w: u32, h: u32) -> (u32, u32) {
+        match self {
+            Projection::Mono => (w, h),
+            Projection::SideBySide { .. } => (2 * w, h),
+            Projection::Ods { .. } => (w, 2 * h),
+        }
+    }
+
+    /// Where eye `eye`'s pixel (`x`, `y`) of a `w` x `h` view sits in the output image.
+    pub fn output_pixel(self, eye: u32, x: u32, y: u32, w: u32, h: u32) -> (u32, u32) {
+        match self {
+            Projection::Mono => (x, y),
+            Projection::SideBySide { .. } => (eye * w + x, y),
+            Projection::Ods { .. } => (x, eye * h + y),
+        }
+    }
+
+    /// The camera frame the rays are built from. A panorama is levelled: latitude 0 is the
+    /// plane normal to the camera's up vector, longitude 0 the view direction projected onto
+    /// it. Assumes [`Camera::validate`] passed.
+    pub fn frame(self, camera: &Camera) -> CameraFrame {
+        let mut f = camera.frame();
+        if let Projection::Ods { .. } = self {
+            let up = camera.up.normalize();
+            let fwd = (f.forward - up * f.forward.dot(up)).normalize();
+            f.right = fwd.cross(up);
+            f.up = up;
+            f.forward = fwd;
+        }
+        f
+    }
+
+    /// Angular size of the largest pixel of a `w` x `h` view (radians): a hit at distance
+    /// `t` has a footprint of about `t * pixel_angle`. For ODS a pixel spans `2 pi / w` of
+    /// longitude at the equator and `pi / h` of latitude.
+    pub fn pixel_angle(self, frame: &CameraFrame, w: u32, h: u32) -> f64 {
+        match self {
+            Projection::Ods { .. } => {
+                (std::f64::consts::PI / h as f64).max(std::f64::consts::TAU / w as f64)
+            }
+            _ => frame.pixel_angle(h),
+        }
+    }
+
+    /// Radius at distance 0 of a cone that covers the rays of a `block` x `block` pixel block
+    /// of a `w`-wide view: the spread of the rays' origins (0 unless the origin moves with the
+    /// pixel, as in ODS, where it moves `eye_separation / 2` per radian of longitude).
+    pub fn cone_base(self, block: u32, w: u32) -> f64 {
+        match self {
+            Projection::Ods { eye_separation } => {
+                0.5 * eye_separation * block as f64 * std::f64::consts::TAU / w as f64
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The fixed origin offset of eye `eye` (relative to the camera position), or `None` when
+    /// the origin moves with the pixel (ODS).
+    pub fn eye_offset(self, frame: &CameraFrame, eye: u32) -> Option<DVec3> {
+        match self {
+            Projection::Mono => Some(DVec3::ZERO),
+            Projection::SideBySide { eye_separation } => {
+                Some(frame.right * (side(eye) * 0.5 * eye_separation))
+            }
+            Projection::Ods { .. } => None,
+        }
+    }
+
+    /// The ray of eye `eye` (0 = left) through per-eye position (`px`, `py`) in pixels (pixel
+    /// centres at +0.5) of a `w` x `h` view: (origin relative to the camera position, unit
+    /// direction).
+    #[inline]
+    pub fn ray(
+        self,
+        frame: &CameraFrame,
+        eye: u32,
+        px: f64,
+        py: f64,
+        w: u32,
+        h: u32,
+    ) -> (DVec3, DVec3) {
+        use std::f64::consts::PI;
+        match self {
+            Projection::Mono => (DVec3::ZERO, frame.ray_dir(px, py, w, h)),
+            Projection::SideBySide { eye_separation } => (
+                frame.right * (side(eye) * 0.5 * eye_separation),
+                frame.ray_dir(px, py, w, h),
+            ),
+            Projection::Ods { eye_separation } => {
+                let lon = px / w as f64 * 2.0 * PI - PI;
+                let lat = 0.5 * PI - py / h as f64 * PI;
+                let (sl, cl) = lon.sin_cos();
+                let (sa, ca) = lat.sin_cos();
+                let dir = frame.right * (sl * ca) + frame.up * sa + frame.forward * (cl * ca);
+                let off =
+                    (frame.right * cl - frame.forward * sl) * (side(eye) * 0.5 * eye_separation);
+                (off, dir)
+            }
+        }
+    }
+}
+
+/// -1 for the left eye (0), +1 for the right.
+fn side(eye: u32) -> f64 {
+    if eye == 0 { -1.0 } else { 1.0 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -125,5 +281,125 @@ mod tests {
         c.up = DVec3::Y;
         c.eye.x = f64::NAN;
         assert!(c.validate().is_err());
+    }
+
+    /// The two eyes' rays towards a point `dist` straight ahead, by bisection on the longitude
+    /// of the equator row: the angle between their longitudes.
+    fn ods_disparity(sep: f64, dist: f64) -> f64 {
+        let c = Camera::default();
+        let p = Projection::Ods {
+            eye_separation: sep,
+        };
+        let f = p.frame(&c);
+        let target = f.eye + f.forward * dist;
+        let (w, h) = (4096u32, 2048u32);
+        let lon_of = |eye: u32| {
+            // The signed miss of the ray at column px, as a function of px: zero where the ray
+            // passes through the target.
+            let miss = |px: f64| {
+                let (off, dir) = p.ray(&f, eye, px, h as f64 / 2.0, w, h);
+                let to = target - (f.eye + off);
+                to.cross(dir).dot(f.up)
+            };
+            let (mut a, mut b) = (w as f64 * 0.25, w as f64 * 0.75);
+            assert!(miss(a) * miss(b) < 0.0);
+            for _ in 0..100 {
+                let m = 0.5 * (a + b);
+                if miss(a) * miss(m) <= 0.0 {
+                    b = m;
+                } else {
+                    a = m;
+                }
+            }
+            (0.5 * (a + b)) / w as f64 * std::f64::consts::TAU - std::f64::consts::PI
+        };
+        lon_of(0) - lon_of(1)
+    }
+
+    #[test]
+    fn ods_disparity_of_a_point_ahead_is_twice_asin_of_half_sep_over_distance() {
+        for (sep, dist) in [(0.065, 1.0), (0.065, 0.2), (0.5, 3.0), (1.0, 0.75)] {
+            let got = ods_disparity(sep, dist);
+            let want = 2.0 * (sep / (2.0 * dist)).asin();
+            assert!(
+                (got - want).abs() < 1e-9,
+                "sep {sep} dist {dist}: disparity {got}, expected {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn ods_rays_are_tangent_to_the_viewing_circle_and_cover_the_sphere() {
+        let c = Camera {
+            up: DVec3::new(0.1, 1.0, 0.0),
+            ..Camera::default()
+        };
+        let p = Projection::Ods {
+            eye_separation: 0.3,
+        };
+        let f = p.frame(&c);
+        let (w, h) = (64u32, 32u32);
+        for eye in 0..2 {
+            for y in 0..h {
+                for x in 0..w {
+                    let (off, dir) = p.ray(&f, eye, x as f64 + 0.5, y as f64 + 0.5, w, h);
+                    assert!((dir.length() - 1.0).abs() < 1e-12);
+                    assert!((off.length() - 0.15).abs() < 1e-12);
+                    assert!(
+                        off.dot(f.up).abs() < 1e-12,
+                        "origin in the horizontal plane"
+                    );
+                    assert!(off.dot(dir).abs() < 1e-12, "tangent");
+                }
+            }
+        }
+        // The centre column looks forward, the top row up, the left edge backwards; the two
+        // edges of the image meet (same ray at longitude -180 and 180).
+        let (_, d) = p.ray(&f, 0, w as f64 / 2.0, h as f64 / 2.0, w, h);
+        assert!((d - f.forward).length() < 1e-12);
+        let (_, d) = p.ray(&f, 0, 3.0, 0.0, w, h);
+        assert!((d - f.up).length() < 1e-12);
+        let a = p.ray(&f, 1, 0.0, 7.0, w, h);
+        let b = p.ray(&f, 1, w as f64, 7.0, w, h);
+        assert!((a.0 - b.0).length() < 1e-12 && (a.1 - b.1).length() < 1e-12);
+        // The left eye sits to the left when looking forward.
+        let (off, _) = p.ray(&f, 0, w as f64 / 2.0, h as f64 / 2.0, w, h);
+        assert!(off.dot(f.right) < 0.0);
+    }
+
+    #[test]
+    fn side_by_side_rays_are_mono_rays_from_shifted_eyes() {
+        let c = Camera::default();
+        let sbs = Projection::SideBySide {
+            eye_separation: 0.2,
+        };
+        let f = sbs.frame(&c);
+        for eye in 0..2 {
+            let (off, dir) = sbs.ray(&f, eye, 3.5, 7.5, 16, 12);
+            assert_eq!(dir, f.ray_dir(3.5, 7.5, 16, 12));
+            assert_eq!(Some(off), sbs.eye_offset(&f, eye));
+            let want = if eye == 0 { -0.1 } else { 0.1 };
+            assert!((off - f.right * want).length() < 1e-15);
+        }
+        assert_eq!(sbs.output_size(16, 12), (32, 12));
+        assert_eq!(sbs.output_pixel(1, 3, 4, 16, 12), (19, 4));
+        let ods = Projection::Ods {
+            eye_separation: 0.2,
+        };
+        assert_eq!(ods.output_size(16, 8), (16, 16));
+        assert_eq!(ods.output_pixel(1, 3, 4, 16, 8), (3, 12));
+    }
+
+    #[test]
+    fn bad_separations_are_refused() {
+        for sep in [-0.1, f64::NAN, f64::INFINITY, 2e6] {
+            let e = Projection::Ods {
+                eye_separation: sep,
+            }
+            .validate()
+            .unwrap_err();
+            assert!(e.contains("eye separation"), "{e}");
+        }
+        assert!(Projection::Mono.validate().is_ok());
     }
 }

@@ -32,7 +32,7 @@ pub mod transforms;
 pub mod value;
 pub mod vec3;
 
-pub use camera::{Camera, CameraFrame};
+pub use camera::{Camera, CameraFrame, Projection};
 pub use eval::Evaluator;
 pub use real::{F32x8, Real};
 pub use scene::{Call, Material, Node, Scene};

@@ -1,5 +1,7 @@
 //! Adapter and device set-up, headless or for a window's surface. A missing adapter, a refused
-//! device and a lost device all become [`GpuError`]s with advice, never panics.
+//! device and a lost device all become [`GpuError`]s with advice, never panics: wgpu's default
+//! handler of uncaptured errors panics, so ours records the first error (and logs each to
+//! stderr), and every wait returns it.
 
 use crate::error::GpuError;
 use std::sync::{Arc, Mutex};
@@ -14,6 +16,8 @@ pub struct Gpu {
     pub limits: wgpu::Limits,
     /// Set by the device-lost callback; checked after every wait.
     lost: Arc<Mutex<Option<String>>>,
+    /// The first error wgpu reported outside an error scope; checked after every wait.
+    uncaptured: Arc<Mutex<Option<String>>>,
 }
 
 /// The backends to try: `WGPU_BACKEND` when set, otherwise wgpu's defaults (Vulkan, Metal,
@@ -37,7 +41,7 @@ impl Gpu {
             desc.backends = wgpu::Backends::VULKAN;
         }
         let backends = desc.backends;
-        Self::new(&wgpu::Instance::new(desc), None).map_err(|e| match e {
+        Self::with_limits(&wgpu::Instance::new(desc), None, |_| {}).map_err(|e| match e {
             GpuError::NoAdapter { .. } => GpuError::NoAdapter {
                 backends: format!("{backends:?}"),
             },
@@ -45,10 +49,32 @@ impl Gpu {
         })
     }
 
+    /// Like [`Gpu::headless_vulkan`], with the device's limits lowered by `shrink` from the
+    /// adapter's: how the tests check that a device too small for a tape or an image gives
+    /// clear errors.
+    pub fn headless_vulkan_limited(
+        shrink: impl FnOnce(&mut wgpu::Limits),
+    ) -> Result<Gpu, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if std::env::var_os("WGPU_BACKEND").is_none() {
+            desc.backends = wgpu::Backends::VULKAN;
+        }
+        Self::with_limits(&wgpu::Instance::new(desc), None, shrink)
+    }
+
     /// A device that can present to `surface` (pass `None` for headless).
     pub fn new(
         instance: &wgpu::Instance,
         surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Gpu, GpuError> {
+        Self::with_limits(instance, surface, |_| {})
+    }
+
+    /// A device with the adapter's limits as changed by `shrink` (which may only lower them).
+    fn with_limits(
+        instance: &wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+        shrink: impl FnOnce(&mut wgpu::Limits),
     ) -> Result<Gpu, GpuError> {
         let backends = wgpu::InstanceDescriptor::new_without_display_handle_from_env().backends;
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
@@ -63,7 +89,8 @@ impl Gpu {
         // Ask for everything the adapter offers: the renderer needs 6 storage buffers in one
         // stage (more than the downlevel defaults) and reports the real buffer and texture
         // limits in its errors.
-        let limits = adapter.limits();
+        let mut limits = adapter.limits();
+        shrink(&mut limits);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("fathom"),
             required_limits: limits.clone(),
@@ -80,12 +107,21 @@ impl Gpu {
                 *g = Some(format!("{reason:?}: {msg}"));
             }
         });
+        let uncaptured = Arc::new(Mutex::new(None));
+        let u = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            eprintln!("fathom: GPU error: {e}");
+            if let Ok(mut g) = u.lock() {
+                g.get_or_insert_with(|| e.to_string());
+            }
+        }));
         Ok(Gpu {
             device,
             queue,
             info,
             limits,
             lost,
+            uncaptured,
         })
     }
 
@@ -117,10 +153,18 @@ impl Gpu {
         }
     }
 
-    /// Errors out when the device-lost callback has fired.
+    /// Errors out when the device-lost callback has fired, or wgpu reported an error
+    /// outside an error scope (a destroyed device, for one, reports only that way until the
+    /// next poll fires the lost callback).
     pub fn check_lost(&self) -> Result<(), GpuError> {
-        match self.lost.lock().ok().and_then(|g| g.clone()) {
-            Some(m) => Err(GpuError::DeviceLost(m)),
+        if let Some(m) = self.lost.lock().ok().and_then(|g| g.clone()) {
+            return Err(GpuError::DeviceLost(m));
+        }
+        match self.uncaptured.lock().ok().and_then(|g| g.clone()) {
+            Some(m) => Err(GpuError::Driver {
+                what: "a GPU command".into(),
+                message: m,
+            }),
             None => Ok(()),
         }
     }

@@ -3,56 +3,23 @@
 //! the G-buffer into a [`Frame`]. The passes mirror fathom-trace's, constant for constant, so
 //! the two renderers agree pixel for pixel up to f32 rounding.
 //!
-//! Projections: a pinhole camera, side-by-side stereo (two parallel pinhole cameras `eye
-//! separation` apart, left eye on the left), and omni-directional stereo (ODS) as an
-//! equirectangular top/bottom pair (left eye on top), the format VR video players read.
+//! Projections ([`Projection`], defined with its f64 ray generation in fathom-core's camera
+//! module and mirrored by `view_ray` and `cone_base` in trace.wgsl): a pinhole camera,
+//! side-by-side stereo, and omni-directional stereo (ODS) as an equirectangular top/bottom pair.
 
 use crate::error::GpuError;
 use crate::precision;
 use crate::renderer::Renderer;
 use fathom_core::frame::{Frame, NO_ID};
-use fathom_core::{Evaluator, Scene, Tape, V3};
+use fathom_core::{Evaluator, Projection, Scene, Tape, V3};
 use std::time::Instant;
 
-/// How the rays leave the camera.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Projection {
-    /// One pinhole view.
-    Mono,
-    /// Two parallel pinhole views side by side (output twice as wide), eyes `eye_separation`
-    /// apart along the camera's right axis.
-    SideBySide { eye_separation: f64 },
-    /// Omni-directional stereo, equirectangular, left eye on top (output twice as tall); each
-    /// eye's view is `width` x `height` and should be 2:1.
-    Ods { eye_separation: f64 },
-}
-
-impl Projection {
-    fn mode(self) -> u32 {
-        match self {
-            Projection::Mono => 0,
-            Projection::SideBySide { .. } => 1,
-            Projection::Ods { .. } => 2,
-        }
-    }
-    fn separation(self) -> f64 {
-        match self {
-            Projection::Mono => 0.0,
-            Projection::SideBySide { eye_separation } | Projection::Ods { eye_separation } => {
-                eye_separation
-            }
-        }
-    }
-    fn eyes(self) -> u32 {
-        if self == Projection::Mono { 1 } else { 2 }
-    }
-    /// Output size for per-eye size `w` x `h`.
-    pub fn output_size(self, w: u32, h: u32) -> (u32, u32) {
-        match self {
-            Projection::Mono => (w, h),
-            Projection::SideBySide { .. } => (2 * w, h),
-            Projection::Ods { .. } => (w, 2 * h),
-        }
+/// The projection's number in the shader's globals (`dims.z`).
+fn mode(p: Projection) -> u32 {
+    match p {
+        Projection::Mono => 0,
+        Projection::SideBySide { .. } => 1,
+        Projection::Ods { .. } => 2,
     }
 }
 
@@ -143,7 +110,7 @@ fn grid_cells(w: u32, h: u32, eyes: u32) -> u64 {
 impl Renderer {
     fn targets(&mut self, o: &RenderOptions) -> Result<&Targets, GpuError> {
         let (ow, oh) = o.projection.output_size(o.width, o.height);
-        let key = (o.width, o.height, o.projection.mode());
+        let key = (o.width, o.height, mode(o.projection));
         if self.targets.as_ref().is_some_and(|t| t.key == key) {
             return Ok(self.targets.as_ref().unwrap());
         }
@@ -251,12 +218,8 @@ impl Renderer {
                 o.width, o.height
             )));
         }
+        o.projection.validate().map_err(GpuError::Invalid)?;
         let sep = o.projection.separation();
-        if !(sep.is_finite() && sep >= 0.0) {
-            return Err(GpuError::Invalid(format!(
-                "eye separation {sep} must be a finite number >= 0"
-            )));
-        }
         let (ow, oh) = o.projection.output_size(o.width, o.height);
         let tex_max = self.gpu.limits.max_texture_dimension_2d;
         if ow > tex_max || oh > tex_max {
@@ -268,22 +231,8 @@ impl Renderer {
         }
         scene.validate().map_err(GpuError::Invalid)?;
         self.gpu.check_lost()?;
-        let mut cam = scene.camera.frame();
-        if let Projection::Ods { .. } = o.projection {
-            // A panorama is levelled: latitude 0 is the plane normal to the camera's up
-            // vector, longitude 0 the view direction projected onto it.
-            let up = scene.camera.up.normalize();
-            let f = (cam.forward - up * cam.forward.dot(up)).normalize();
-            cam.right = f.cross(up);
-            cam.up = up;
-            cam.forward = f;
-        }
-        let pixel_angle = match o.projection {
-            Projection::Ods { .. } => {
-                (std::f64::consts::PI / o.height as f64).max(std::f64::consts::TAU / o.width as f64)
-            }
-            _ => cam.pixel_angle(o.height),
-        };
+        let cam = o.projection.frame(&scene.camera);
+        let pixel_angle = o.projection.pixel_angle(&cam, o.width, o.height);
         let footprint = pixel_angle * (scene.camera.target - scene.camera.eye).length();
         let eye_dist = scene.camera.eye.length();
         if precision::too_deep(footprint, eye_dist) {
@@ -336,7 +285,7 @@ impl Renderer {
                 c3(r.palette[2], r.fog),
                 c3(r.palette[3], sep),
             ],
-            dims: [o.width, o.height, o.projection.mode(), r.max_steps],
+            dims: [o.width, o.height, mode(o.projection), r.max_steps],
             dims2: [
                 scene.lights.len().min(8) as u32,
                 self.n_materials.max(1),

@@ -8,7 +8,8 @@ use crate::shader;
 use fathom_core::limits;
 use fathom_core::tape::Tape;
 
-pub use crate::passes::{Projection, RenderOptions, RenderStats};
+pub use crate::passes::{RenderOptions, RenderStats};
+pub use fathom_core::Projection;
 
 /// Bytes of one material in the GPU table: albedo + specular, shininess + trap colour + 2 pad.
 pub(crate) const MATERIAL_BYTES: u64 = 32;
@@ -165,28 +166,38 @@ pub struct GpuValue {
 }
 
 impl Renderer {
-    /// Builds the shader module and every pipeline, and the tape buffers at their largest size.
+    /// Builds the shader module and every pipeline, and the tape buffers at their largest size:
+    /// the documented tape limits, or less on a device whose storage buffers are smaller (then
+    /// a tape that does not fit is refused by [`Renderer::set_tape`] naming the limit).
     pub fn new(gpu: Gpu) -> Result<Renderer, GpuError> {
         let max_storage = gpu.limits.max_storage_buffer_binding_size;
-        let sizes = [
+        // (what, bytes at the documented limit, bytes of one entry, fewest entries usable)
+        let wanted = [
             (
                 "the tape's instruction buffer",
                 limits::MAX_TAPE_LEN as u64 * 16,
+                16,
+                64,
             ),
-            ("the parameter buffer", limits::MAX_PARAMS as u64 * 4),
+            ("the parameter buffer", limits::MAX_PARAMS as u64 * 4, 4, 64),
             (
                 "the material table",
                 limits::MAX_NODES as u64 * MATERIAL_BYTES,
+                MATERIAL_BYTES,
+                16,
             ),
         ];
-        for (what, bytes) in sizes {
-            if bytes > max_storage {
+        let mut sizes = [("", 0u64); 3];
+        for (i, (what, bytes, entry, fewest)) in wanted.into_iter().enumerate() {
+            let fit = bytes.min(max_storage / entry * entry);
+            if fit < fewest * entry {
                 return Err(GpuError::BufferTooLarge {
-                    what: what.into(),
-                    bytes,
+                    what: format!("{what} (at least {fewest} entries)"),
+                    bytes: fewest * entry,
                     limit: max_storage,
                 });
             }
+            sizes[i] = (what, fit);
         }
         let pipes = Pipelines::new(&gpu)?;
         let buf = |label: &str, size: u64| {
@@ -250,25 +261,25 @@ impl Renderer {
     pub fn set_tape(&mut self, tape: &Tape) -> Result<(), GpuError> {
         let words = tape.words();
         let checks = [
-            ("the tape", words.len() as u64 * 4, self.instrs.size()),
             (
-                "the parameter buffer",
+                format!("the tape ({} instructions)", words.len() / 4),
+                words.len() as u64 * 4,
+                self.instrs.size(),
+            ),
+            (
+                format!("the parameter buffer ({} parameters)", tape.params().len()),
                 tape.params().len() as u64 * 4,
                 self.params.size(),
             ),
             (
-                "the material table",
+                format!("the material table ({} materials)", tape.materials().len()),
                 tape.materials().len() as u64 * MATERIAL_BYTES,
                 self.materials.size(),
             ),
         ];
         for (what, bytes, limit) in checks {
             if bytes > limit {
-                return Err(GpuError::BufferTooLarge {
-                    what: what.into(),
-                    bytes,
-                    limit,
-                });
+                return Err(GpuError::BufferTooLarge { what, bytes, limit });
             }
         }
         self.gpu.check_lost()?;

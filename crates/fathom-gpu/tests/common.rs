@@ -1,7 +1,9 @@
 //! Helpers shared by the GPU integration tests: the device (failing loudly without one) and a
 //! small deterministic random generator.
 
+use fathom_core::frame::Frame;
 use fathom_gpu::{Gpu, Renderer};
+use fathom_trace::post::to_rgb8;
 use std::sync::{LazyLock, Mutex, MutexGuard};
 
 static SHARED: LazyLock<Mutex<Renderer>> = LazyLock::new(|| Mutex::new(fresh_renderer()));
@@ -40,4 +42,59 @@ impl Rng {
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
     }
+}
+
+/// Largest per-channel difference of the 8-bit sRGB output that counts as "the same colour".
+#[allow(dead_code)]
+pub const COLOUR_TOL: u8 = 8;
+
+/// Whether pixel `i` lies on a silhouette of `f`: a 3x3 neighbour differs in hit/miss.
+#[allow(dead_code)]
+fn on_silhouette(f: &Frame, i: usize) -> bool {
+    let (x, y) = ((i as u32 % f.width) as i64, (i as u32 / f.width) as i64);
+    let hit = f.is_hit(i);
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            let (nx, ny) = (x + dx, y + dy);
+            if nx < 0 || ny < 0 || nx >= f.width as i64 || ny >= f.height as i64 {
+                continue;
+            }
+            if f.is_hit(f.index(nx as u32, ny as u32)) != hit {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// (fraction of pixels whose colours agree within [`COLOUR_TOL`], hit/miss disagreements away
+/// from silhouettes, hit/miss disagreements on them).
+#[allow(dead_code)]
+pub fn compare(a: &Frame, b: &Frame) -> (f64, usize, usize) {
+    assert_eq!(
+        (a.width, a.height),
+        (b.width, b.height),
+        "frame sizes differ"
+    );
+    let (ca, cb) = (to_rgb8(a), to_rgb8(b));
+    let mut same = 0;
+    let mut hit_bad = 0;
+    let mut hit_sil = 0;
+    for i in 0..a.len() {
+        let d = (0..3)
+            .map(|c| ca[3 * i + c].abs_diff(cb[3 * i + c]))
+            .max()
+            .unwrap();
+        if d <= COLOUR_TOL {
+            same += 1;
+        }
+        if a.is_hit(i) != b.is_hit(i) {
+            if on_silhouette(a, i) || on_silhouette(b, i) {
+                hit_sil += 1;
+            } else {
+                hit_bad += 1;
+            }
+        }
+    }
+    (same as f64 / a.len() as f64, hit_bad, hit_sil)
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::renderer;
+use common::{COLOUR_TOL, compare, renderer};
 
 use fathom_core::frame::Frame;
 use fathom_core::presets::{self, PRESETS};
@@ -12,10 +12,6 @@ use fathom_core::scene::{Call, DomainOp, Node, Shape};
 use fathom_core::transforms::Transform;
 use fathom_core::{Scene, Tape};
 use fathom_gpu::{Projection, RenderOptions};
-use fathom_trace::post::to_rgb8;
-
-/// Largest per-channel difference of the 8-bit sRGB output that counts as "the same colour".
-const COLOUR_TOL: u8 = 8;
 
 fn cpu(scene: &Scene, w: u32, h: u32) -> Frame {
     let o = fathom_trace::Options {
@@ -33,49 +29,6 @@ fn mono(w: u32, h: u32) -> RenderOptions {
         projection: Projection::Mono,
         prepass: true,
     }
-}
-
-/// Whether pixel `i` lies on a silhouette of `f`: a 3x3 neighbour differs in hit/miss.
-fn on_silhouette(f: &Frame, i: usize) -> bool {
-    let (x, y) = ((i as u32 % f.width) as i64, (i as u32 / f.width) as i64);
-    let hit = f.is_hit(i);
-    for dy in -1..=1 {
-        for dx in -1..=1 {
-            let (nx, ny) = (x + dx, y + dy);
-            if nx < 0 || ny < 0 || nx >= f.width as i64 || ny >= f.height as i64 {
-                continue;
-            }
-            if f.is_hit(f.index(nx as u32, ny as u32)) != hit {
-                return true;
-            }
-        }
-    }
-    false
-}
-
-/// (fraction of pixels whose colours agree, hit/miss disagreements away from silhouettes).
-fn compare(a: &Frame, b: &Frame) -> (f64, usize, usize) {
-    let (ca, cb) = (to_rgb8(a), to_rgb8(b));
-    let mut same = 0;
-    let mut hit_bad = 0;
-    let mut hit_sil = 0;
-    for i in 0..a.len() {
-        let d = (0..3)
-            .map(|c| ca[3 * i + c].abs_diff(cb[3 * i + c]))
-            .max()
-            .unwrap();
-        if d <= COLOUR_TOL {
-            same += 1;
-        }
-        if a.is_hit(i) != b.is_hit(i) {
-            if on_silhouette(a, i) || on_silhouette(b, i) {
-                hit_sil += 1;
-            } else {
-                hit_bad += 1;
-            }
-        }
-    }
-    (same as f64 / a.len() as f64, hit_bad, hit_sil)
 }
 
 #[test]

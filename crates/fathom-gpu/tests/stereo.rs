@@ -1,9 +1,10 @@
-//! Stereo on the GPU: side-by-side views differ by the parallax a pinhole pair predicts, and
-//! the omni-directional stereo (ODS) frame wraps around without a seam.
+//! Stereo on the GPU: side-by-side views differ by the parallax a pinhole pair predicts, the
+//! omni-directional stereo (ODS) frame wraps around without a seam, and an ODS frame of a
+//! preset matches the CPU tracer's.
 
 mod common;
 
-use common::renderer;
+use common::{COLOUR_TOL, compare, renderer};
 use fathom_core::Scene;
 use fathom_core::frame::Frame;
 use fathom_core::primitives::Primitive;
@@ -147,4 +148,42 @@ fn ods_frame_wraps_around_without_a_seam() {
         differing > 0 && differing < (w * h) as usize / 4,
         "{differing} pixels differ between the eyes"
     );
+}
+
+#[test]
+fn ods_frame_of_a_preset_matches_the_cpu_tracer() {
+    let mut r = renderer();
+    let mut scene = fathom_core::presets::load("menger").unwrap();
+    // Close to the sponge, so that it fills a good part of the panorama.
+    scene.camera.eye = glam::DVec3::new(0.6, 0.5, 1.7);
+    let (w, h) = (128u32, 64u32);
+    let projection = Projection::Ods {
+        eye_separation: 0.2,
+    };
+    let o = RenderOptions {
+        width: w,
+        height: h,
+        projection,
+        prepass: true,
+    };
+    let (g, _) = r.render_scene(&scene, &o).unwrap();
+    let co = fathom_trace::Options {
+        width: w,
+        height: h,
+        projection,
+        ..Default::default()
+    };
+    let (c, _) = fathom_trace::render(&scene, &co, &|_, _| {}).unwrap();
+    let hits = (0..c.len()).filter(|&i| c.is_hit(i)).count();
+    let (same, hit_bad, hit_sil) = compare(&c, &g);
+    let report = format!(
+        "{:.2}% of pixels within {COLOUR_TOL}/255, {hit_bad} hit/miss disagreements off \
+         silhouettes, {hit_sil} on them ({hits} CPU hits of {})",
+        same * 100.0,
+        c.len()
+    );
+    eprintln!("menger ODS {w}x{h} per eye: {report}");
+    // The same threshold as the mono preset agreement test.
+    assert!(hits > c.len() / 10, "the preset fills the view: {report}");
+    assert!(same >= 0.99 && hit_bad == 0, "{report}");
 }

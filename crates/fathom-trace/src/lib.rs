@@ -5,13 +5,15 @@
 //! - [`shade`]: normals, materials, Blinn-Phong, soft shadows, AO, orbit traps, sky;
 //! - [`post`]: effects on a [`fathom_core::frame::Frame`] (fog, SSAO, tonemap, gamma);
 //! - [`output`]: PNG, mask, depth EXR and step heat-map files;
-//! - [`render`]: one frame end to end, tiles over rayon.
+//! - [`render`]: one frame end to end, tiles over rayon;
+//! - [`stereo`]: the side-by-side and top/bottom layouts of stereo views.
 
 pub mod output;
 pub mod post;
 pub mod prepass;
 pub mod render;
 pub mod shade;
+pub mod stereo;
 pub mod tracer;
 
 pub use render::{Options, Stats, render};

@@ -8,10 +8,14 @@
 //! cone stops, so that distance is a safe start for every ray in the block. Each finer level
 //! (and finally each pixel) starts at the minimum over the 2x2 nearest coarser cells, which also
 //! absorbs small errors of distance estimates that are not strict bounds.
+//!
+//! When the rays of a block leave from different points (omni-directional stereo moves the
+//! origin along the viewing circle with the longitude), the cone starts with the radius
+//! [`Projection::cone_base`] covering that spread.
 
 use crate::tracer::{MarchParams, march};
 use fathom_core::real::Real;
-use fathom_core::{CameraFrame, Evaluator, Tape, V3};
+use fathom_core::{CameraFrame, Evaluator, Projection, Tape, V3};
 use rayon::prelude::*;
 
 /// Block sizes of the prepass levels, coarsest first.
@@ -65,6 +69,9 @@ impl StartGrid {
 pub struct View<'a> {
     pub tape: &'a Tape,
     pub cam: &'a CameraFrame,
+    /// How rays leave the camera, and which eye this view is.
+    pub projection: Projection,
+    pub eye: u32,
     pub width: u32,
     pub height: u32,
     pub pixel_angle: f64,
@@ -93,6 +100,7 @@ fn level<S: Real>(view: &View, block: u32, coarser: &StartGrid) -> (StartGrid, u
     let slope = 0.75 * block as f64 * view.pixel_angle;
     let params = MarchParams {
         cone_slope: slope,
+        cone_base: view.projection.cone_base(block, view.width),
         // Stop once the cone has closed in to within a quarter of its radius: creeping further
         // costs many steps for little.
         eps_slope: 0.25 * slope + view.base.eps_slope,
@@ -111,6 +119,7 @@ fn level<S: Real>(view: &View, block: u32, coarser: &StartGrid) -> (StartGrid, u
                 let mut dx = [0f64; 8];
                 let mut dy = [0f64; 8];
                 let mut dz = [0f64; 8];
+                let mut o = [[0f64; 8]; 3];
                 let mut t0 = [0f64; 8];
                 let mut live = [0f64; 8];
                 for l in 0..S::LANES {
@@ -118,8 +127,12 @@ fn level<S: Real>(view: &View, block: u32, coarser: &StartGrid) -> (StartGrid, u
                     let (cx, cy) = (k % w, k / w);
                     let px = ((cx * block) as f64 + 0.5 * block as f64).min(view.width as f64);
                     let py = ((cy * block) as f64 + 0.5 * block as f64).min(view.height as f64);
-                    let d = view.cam.ray_dir(px, py, view.width, view.height);
+                    let (off, d) =
+                        view.projection
+                            .ray(view.cam, view.eye, px, py, view.width, view.height);
                     (dx[l], dy[l], dz[l]) = (d.x, d.y, d.z);
+                    let e = view.cam.eye + off;
+                    (o[0][l], o[1][l], o[2][l]) = (e.x, e.y, e.z);
                     t0[l] = coarser.start_at(px, py) as f64;
                     live[l] = if l < lanes.len() { 0.0 } else { 1.0 };
                 }
@@ -128,8 +141,11 @@ fn level<S: Real>(view: &View, block: u32, coarser: &StartGrid) -> (StartGrid, u
                     S::from_lanes(&dy[..S::LANES]),
                     S::from_lanes(&dz[..S::LANES]),
                 );
-                let e = view.cam.eye;
-                let origin = V3::new(S::splat(e.x), S::splat(e.y), S::splat(e.z));
+                let origin = V3::new(
+                    S::from_lanes(&o[0][..S::LANES]),
+                    S::from_lanes(&o[1][..S::LANES]),
+                    S::from_lanes(&o[2][..S::LANES]),
+                );
                 let live = S::from_lanes(&live[..S::LANES]).lt(S::splat(0.5));
                 let t0 = S::from_lanes(&t0[..S::LANES]);
                 let m = march(ev, view.tape, origin, dir, t0, live, &params);

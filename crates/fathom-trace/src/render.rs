@@ -5,6 +5,11 @@
 //! result depends only on its own ray, and per-tile results are written back in tile order, so
 //! the image does not depend on the number of threads.
 //!
+//! Stereo ([`Projection`]): each eye is rendered as a view of its own (prepass, tiles, post
+//! effects), then the views are laid out side by side or top/bottom (`crate::stereo`). SSAO is
+//! skipped for omni-directional stereo: screen space does not apply across the
+//! equirectangular wrap and its stretched poles.
+//!
 //! Deep zoom: f32 positions have about 7 significant digits. When the pixel footprint at the
 //! target falls below `DEEP_FOOTPRINT` times the camera's distance from the origin (or 1), the
 //! whole frame switches to the f64 path (one ray per packet; slow but exact).
@@ -15,7 +20,7 @@ use crate::shade::{Shaded, Shading, shade};
 use crate::tracer::{MarchParams, Method, OMEGA, march};
 use fathom_core::frame::{Frame, NO_ID};
 use fathom_core::real::{Mask, Real};
-use fathom_core::{Evaluator, F32x8, Scene, Tape, V3};
+use fathom_core::{Evaluator, F32x8, Projection, Scene, Tape, V3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -43,8 +48,10 @@ pub struct Options {
     pub supersample: u32,
     /// Skip the colouring pass (depth, ids and steps only; colour stays black).
     pub geometry_only: bool,
-    /// Screen-space ambient occlusion strength (0 disables), [0, 4].
+    /// Screen-space ambient occlusion strength (0 disables), [0, 4]. Ignored for ODS.
     pub ssao: f32,
+    /// Mono or stereo; `width` x `height` is the size of one eye's view.
+    pub projection: Projection,
 }
 
 impl Default for Options {
@@ -57,6 +64,7 @@ impl Default for Options {
             supersample: 1,
             geometry_only: false,
             ssao: 0.0,
+            projection: Projection::Mono,
         }
     }
 }
@@ -70,10 +78,11 @@ impl Options {
                 self.width, self.height
             ));
         }
-        if self.width > MAX_SIDE || self.height > MAX_SIDE {
+        self.projection.validate()?;
+        let (ow, oh) = self.projection.output_size(self.width, self.height);
+        if self.width > MAX_SIDE || self.height > MAX_SIDE || ow > MAX_SIDE || oh > MAX_SIDE {
             return Err(format!(
-                "image size {}x{} exceeds the limit of {MAX_SIDE} pixels per side",
-                self.width, self.height
+                "image size {ow}x{oh} exceeds the limit of {MAX_SIDE} pixels per side"
             ));
         }
         if !(1..=MAX_SUPERSAMPLE).contains(&self.supersample) {
@@ -82,11 +91,11 @@ impl Options {
                 self.supersample
             ));
         }
-        let px = self.width as u64 * self.height as u64 * (self.supersample as u64).pow(2);
+        let px = ow as u64 * oh as u64 * (self.supersample as u64).pow(2);
         if px > MAX_PIXELS {
             return Err(format!(
-                "{}x{} with {}x{} supersampling is {px} samples; the limit is {MAX_PIXELS}",
-                self.width, self.height, self.supersample, self.supersample
+                "{ow}x{oh} with {}x{} supersampling is {px} samples; the limit is {MAX_PIXELS}",
+                self.supersample, self.supersample
             ));
         }
         if !(self.ssao.is_finite() && (0.0..=4.0).contains(&self.ssao)) {
@@ -119,6 +128,18 @@ pub struct Stats {
 }
 
 impl Stats {
+    /// Adds the counters and pass timings of another view of the same frame.
+    fn add(&mut self, o: &Stats) {
+        self.primary_rays += o.primary_rays;
+        self.shadow_rays += o.shadow_rays;
+        self.de_prepass += o.de_prepass;
+        self.de_trace += o.de_trace;
+        self.de_shade += o.de_shade;
+        self.hits += o.hits;
+        self.ms_prepass += o.ms_prepass;
+        self.ms_trace += o.ms_trace;
+    }
+
     /// Distance evaluations of the depth passes (prepass and primary rays) per pixel.
     pub fn de_per_pixel(&self) -> f64 {
         (self.de_prepass + self.de_trace) as f64 / (self.width as f64 * self.height as f64)
@@ -129,6 +150,9 @@ struct Ctx<'a> {
     tape: &'a Tape,
     scene: &'a Scene,
     cam: fathom_core::CameraFrame,
+    projection: Projection,
+    /// Which view of the projection (0 = left eye).
+    eye: u32,
     w: u32,
     h: u32,
     pixel_angle: f64,
@@ -148,8 +172,9 @@ pub fn render(
     let tape = Tape::compile(scene).map_err(|e| e.to_string())?;
     let ss = opts.supersample;
     let (w, h) = (opts.width * ss, opts.height * ss);
-    let cam = scene.camera.frame();
-    let pixel_angle = cam.pixel_angle(h);
+    let projection = opts.projection;
+    let cam = projection.frame(&scene.camera);
+    let pixel_angle = projection.pixel_angle(&cam, w, h);
     let r = &scene.render;
     let params = MarchParams {
         t_max: r.max_distance,
@@ -157,43 +182,58 @@ pub fn render(
         eps_slope: 0.5 * pixel_angle * r.pixel_epsilon,
         eps_min: 0.0,
         cone_slope: 0.0,
+        cone_base: 0.0,
         omega: match opts.method {
             Method::Basic => 1.0,
             Method::Enhanced => OMEGA,
         },
     };
-    let ctx = Ctx {
-        tape: &tape,
-        scene,
-        cam,
-        w,
-        h,
-        pixel_angle,
-        params,
-        opts,
-    };
     let footprint = pixel_angle * (scene.camera.target - scene.camera.eye).length();
     let deep = footprint < DEEP_FOOTPRINT * scene.camera.eye.length().max(1.0);
-    let (mut frame, mut stats) = if deep {
-        render_with::<f64>(&ctx, progress)
-    } else {
-        render_with::<F32x8>(&ctx, progress)
-    };
+    let eyes = projection.eyes();
+    let mut views = Vec::with_capacity(eyes as usize);
+    let mut stats = Stats::default();
+    for eye in 0..eyes {
+        let ctx = Ctx {
+            tape: &tape,
+            scene,
+            cam,
+            projection,
+            eye,
+            w,
+            h,
+            pixel_angle,
+            params,
+            opts,
+        };
+        let progress = |done: usize, total: usize| {
+            progress(done + eye as usize * total, total * eyes as usize);
+        };
+        let (mut frame, s) = if deep {
+            render_with::<f64>(&ctx, &progress)
+        } else {
+            render_with::<F32x8>(&ctx, &progress)
+        };
+        stats.add(&s);
+        let t_post = Instant::now();
+        let screen_space = !matches!(projection, Projection::Ods { .. });
+        if opts.ssao > 0.0 && !opts.geometry_only && screen_space {
+            post::ssao(&mut frame, opts.ssao, pixel_angle as f32);
+        }
+        if r.fog > 0.0 && !opts.geometry_only {
+            post::fog(&mut frame, r.fog as f32, r.sky_bottom.map(|c| c as f32));
+        }
+        if ss > 1 {
+            frame = post::downsample(&frame, ss);
+        }
+        post::sanitize(&mut frame);
+        stats.ms_post += t_post.elapsed().as_secs_f64() * 1e3;
+        views.push(frame);
+    }
     stats.deep = deep;
-    let t_post = Instant::now();
-    if opts.ssao > 0.0 && !opts.geometry_only {
-        post::ssao(&mut frame, opts.ssao, pixel_angle as f32);
-    }
-    if r.fog > 0.0 && !opts.geometry_only {
-        post::fog(&mut frame, r.fog as f32, r.sky_bottom.map(|c| c as f32));
-    }
-    if ss > 1 {
-        frame = post::downsample(&frame, ss);
-    }
-    post::sanitize(&mut frame);
-    stats.ms_post = t_post.elapsed().as_secs_f64() * 1e3;
-    stats.width = opts.width;
-    stats.height = opts.height;
+    let frame = crate::stereo::assemble(projection, &views);
+    stats.width = frame.width;
+    stats.height = frame.height;
     stats.ms_total = start.elapsed().as_secs_f64() * 1e3;
     Ok((frame, stats))
 }
@@ -215,10 +255,16 @@ struct TileOut {
 fn render_with<S: Real>(ctx: &Ctx, progress: &(dyn Fn(usize, usize) + Sync)) -> (Frame, Stats) {
     let mut stats = Stats::default();
     let t0 = Instant::now();
-    // Every ray may start at the distance bound measured at the eye.
-    let e = ctx.cam.eye;
-    let d_eye = Evaluator::<f64>::new()
+    // Every ray may start at the distance bound measured at its eye; when the origin moves
+    // with the pixel (ODS), at the camera position less the largest offset.
+    let (e, slack) = match ctx.projection.eye_offset(&ctx.cam, ctx.eye) {
+        Some(off) => (ctx.cam.eye + off, 0.0),
+        None => (ctx.cam.eye, 0.5 * ctx.projection.separation()),
+    };
+    let d_eye = (Evaluator::<f64>::new()
         .distance(ctx.tape, V3::new(e.x, e.y, e.z))
+        .max(0.0)
+        - slack)
         .max(0.0);
     let t_start = if d_eye.is_finite() {
         (d_eye * 0.999) as f32
@@ -229,6 +275,8 @@ fn render_with<S: Real>(ctx: &Ctx, progress: &(dyn Fn(usize, usize) + Sync)) -> 
         let view = View {
             tape: ctx.tape,
             cam: &ctx.cam,
+            projection: ctx.projection,
+            eye: ctx.eye,
             width: ctx.w,
             height: ctx.h,
             pixel_angle: ctx.pixel_angle,
@@ -334,28 +382,36 @@ fn tile<S: Real>(
             }
         }
     }
-    let e = ctx.cam.eye;
-    let origin = V3::new(S::splat(e.x), S::splat(e.y), S::splat(e.z));
-    let mut hits: Vec<(usize, [f64; 3], f64)> = Vec::new();
+    let lanes3 = |a: &[[f64; 8]; 3]| {
+        V3::new(
+            S::from_lanes(&a[0][..S::LANES]),
+            S::from_lanes(&a[1][..S::LANES]),
+            S::from_lanes(&a[2][..S::LANES]),
+        )
+    };
+    // Hits to colour: (index in the tile, ray direction, distance, ray origin).
+    let mut hits: Vec<(usize, [f64; 3], f64, [f64; 3])> = Vec::new();
     for packet in order.chunks(S::LANES) {
         let mut d = [[0f64; 8]; 3];
+        let mut o = [[0f64; 8]; 3];
+        let mut origins = [[0f64; 3]; 8];
         let mut t0 = [0f64; 8];
         let mut live = [0f64; 8];
         let mut dirs = [[0f64; 3]; 8];
         for l in 0..S::LANES {
             let (x, y) = packet[l.min(packet.len() - 1)];
             let (px, py) = ((x0 + x) as f64 + 0.5, (y0 + y) as f64 + 0.5);
-            let dv = ctx.cam.ray_dir(px, py, ctx.w, ctx.h);
+            let (off, dv) = ctx.projection.ray(&ctx.cam, ctx.eye, px, py, ctx.w, ctx.h);
             dirs[l] = [dv.x, dv.y, dv.z];
             (d[0][l], d[1][l], d[2][l]) = (dv.x, dv.y, dv.z);
+            let ov = ctx.cam.eye + off;
+            origins[l] = [ov.x, ov.y, ov.z];
+            (o[0][l], o[1][l], o[2][l]) = (ov.x, ov.y, ov.z);
             t0[l] = grid.start_at(px, py) as f64;
             live[l] = if l < packet.len() { 0.0 } else { 1.0 };
         }
-        let dir = V3::new(
-            S::from_lanes(&d[0][..S::LANES]),
-            S::from_lanes(&d[1][..S::LANES]),
-            S::from_lanes(&d[2][..S::LANES]),
-        );
+        let dir = lanes3(&d);
+        let origin = lanes3(&o);
         let live = S::from_lanes(&live[..S::LANES]).lt(S::splat(0.5));
         let m = march(
             ev,
@@ -376,7 +432,7 @@ fn tile<S: Real>(
             let is_hit = hit_any.any() && lane_set::<S>(m.hit, l);
             if is_hit && t.is_finite() {
                 out.depth[k] = t as f32;
-                hits.push((k, dirs[l], t));
+                hits.push((k, dirs[l], t, origins[l]));
             } else {
                 out.colour[k] = shading.sky(dirs[l]);
             }
@@ -386,39 +442,33 @@ fn tile<S: Real>(
     let mut shaded = [Shaded::default(); 8];
     for packet in hits.chunks(S::LANES) {
         let mut d = [[0f64; 8]; 3];
+        let mut o = [[0f64; 8]; 3];
         let mut t = [0f64; 8];
         let mut live = [0f64; 8];
         for l in 0..S::LANES {
-            let (_, dv, tt) = packet[l.min(packet.len() - 1)];
+            let (_, dv, tt, ov) = packet[l.min(packet.len() - 1)];
             (d[0][l], d[1][l], d[2][l]) = (dv[0], dv[1], dv[2]);
+            (o[0][l], o[1][l], o[2][l]) = (ov[0], ov[1], ov[2]);
             t[l] = tt;
             live[l] = if l < packet.len() { 0.0 } else { 1.0 };
         }
         if ctx.opts.geometry_only {
             // Geometry only: the id from one evaluation at the hit, no lighting.
-            let p = V3::new(
-                S::from_lanes(&d[0][..S::LANES]),
-                S::from_lanes(&d[1][..S::LANES]),
-                S::from_lanes(&d[2][..S::LANES]),
-            ) * S::from_lanes(&t[..S::LANES])
-                + origin;
+            let p = lanes3(&d) * S::from_lanes(&t[..S::LANES]) + lanes3(&o);
             let v = ev.eval(ctx.tape, p);
-            for (l, &(k, _, _)) in packet.iter().enumerate() {
+            for (l, &(k, _, _, _)) in packet.iter().enumerate() {
                 out.id[k] = v.id.lane(l).max(0.0) as u32;
             }
             continue;
         }
-        let dir = V3::new(
-            S::from_lanes(&d[0][..S::LANES]),
-            S::from_lanes(&d[1][..S::LANES]),
-            S::from_lanes(&d[2][..S::LANES]),
-        );
+        let dir = lanes3(&d);
+        let origin = lanes3(&o);
         let tv = S::from_lanes(&t[..S::LANES]);
         let live = S::from_lanes(&live[..S::LANES]).lt(S::splat(0.5));
         let footprint = tv * S::splat(ctx.pixel_angle);
         out.de_shade += shade(ev, shading, origin, dir, tv, footprint, live, &mut shaded);
         out.shadow_rays += (packet.len() * shading.lights.iter().filter(|l| l.2).count()) as u64;
-        for (l, &(k, _, _)) in packet.iter().enumerate() {
+        for (l, &(k, _, _, _)) in packet.iter().enumerate() {
             out.colour[k] = shaded[l].colour;
             out.normal[k] = shaded[l].normal;
             out.id[k] = shaded[l].id;

@@ -12,7 +12,8 @@
 //!   (`d < 0`) after an over-relaxed step counts as a failure too.
 //!
 //! The same loop marches cones for the prepass: with a cone slope `c`, a lane steps by
-//! `d - c t`, which keeps every ray inside the cone outside the surface (triangle inequality).
+//! `d - c t - c0` (`c0`: the cone's radius at the start, when its rays leave from different
+//! points), which keeps every ray inside the cone outside the surface (triangle inequality).
 //!
 //! The hit test uses a pixel-footprint epsilon that grows with distance: a lane hits when
 //! `d - c t < eps_slope * t + eps_min`.
@@ -48,6 +49,8 @@ pub struct MarchParams {
     pub eps_min: f64,
     /// Radius of the cone per unit of distance (0 for a ray).
     pub cone_slope: f64,
+    /// Radius of the cone at distance 0 (the spread of its rays' origins; 0 for a ray).
+    pub cone_base: f64,
     /// Over-relaxation factor (1 for basic sphere tracing).
     pub omega: f64,
 }
@@ -81,6 +84,7 @@ pub fn march<S: Real>(
     let eps_slope = S::splat(p.eps_slope);
     let eps_min = S::splat(p.eps_min);
     let cone = S::splat(p.cone_slope);
+    let cone0 = S::splat(p.cone_base);
     let mut t = t0;
     let mut active = live & t.lt(t_max);
     let mut hit = zero.lt(zero);
@@ -97,7 +101,7 @@ pub fn march<S: Real>(
         // Keinert's overlap test, only meaningful after an over-relaxed step; landing inside
         // (d < 0) after such a step also means it overshot.
         let fail = omega.gt(one) & ((d.abs() + prev_d).lt(prev_step) | d.lt(zero));
-        let free = d - cone * t;
+        let free = d - cone * t - cone0;
         let new_hit = active & !fail & free.lt(eps_slope * t + eps_min);
         hit = hit | new_hit;
         active = active & !new_hit;
@@ -135,6 +139,7 @@ mod tests {
             eps_slope: 1e-4,
             eps_min: 0.0,
             cone_slope: 0.0,
+            cone_base: 0.0,
             omega,
         }
     }

@@ -27,6 +27,7 @@ pub enum TracerKind {
 ///   fathom render --preset mandelbulb -o b.png --steps steps.png --stats stats.json
 ///   fathom render --preset mandelbulb --gpu -o gpu.png
 ///   fathom render --preset mandelbulb --gpu --stereo ods --size 2048x1024 -o vr.png
+///   fathom render --preset menger --stereo sbs --size 640x480 -o pair.png
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct RenderArgs {
@@ -87,7 +88,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub gpu: bool,
     /// Stereo: `sbs` (side by side, twice as wide) or `ods` (360-degree equirectangular, left
-    /// eye on top, twice as tall; use a 2:1 --size; needs --gpu).
+    /// eye on top, twice as tall; use a 2:1 --size). --size is one eye's view. Not with
+    /// --renderer svo.
     #[arg(long, value_enum)]
     pub stereo: Option<crate::render_gpu::StereoKind>,
     /// Distance between the eyes for --stereo, in scene units.
@@ -191,12 +193,16 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         supersample: a.supersample,
         geometry_only: false,
         ssao: a.ssao,
+        projection: crate::render_gpu::projection(
+            a.stereo,
+            a.eye_separation,
+            a.renderer == crate::cmd_zoom::RendererKind::Svo,
+        )?,
     };
     opts.validate()?;
     if a.threads == Some(0) || a.threads.is_some_and(|t| t > 1024) {
         return Err("--threads must be in [1, 1024]".into());
     }
-    crate::render_gpu::check(a.gpu, a.stereo, a.eye_separation)?;
     let scene = load_scene(&a)?;
     if a.renderer == crate::cmd_zoom::RendererKind::Svo {
         return crate::cmd_zoom::render_still(&scene, &a);
@@ -229,10 +235,8 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     };
-    let (frame, stats, ms_total) = if a.gpu || a.stereo.is_some() {
-        let r = pool.install(|| {
-            crate::render_gpu::render(&scene, &opts, a.gpu, a.stereo, a.eye_separation)
-        })?;
+    let (frame, stats, ms_total) = if a.gpu {
+        let r = pool.install(|| crate::render_gpu::render(&scene, &opts))?;
         (r.frame, r.stats, r.ms_total)
     } else {
         let (frame, stats) = pool.install(|| fathom_trace::render(&scene, &opts, &progress))?;
@@ -259,8 +263,8 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         eprintln!(
             "wrote {} ({}x{}) in {:.0} ms",
             shown.display(),
-            width,
-            height,
+            frame.width,
+            frame.height,
             ms_total
         );
     }
@@ -337,6 +341,33 @@ mod tests {
         a.fov = Some(200.0);
         assert!(run(a).unwrap_err().contains("fov"));
         assert!(t.elapsed().as_secs_f64() < 5.0);
+    }
+
+    #[test]
+    fn stereo_renders_on_the_cpu_and_is_refused_for_the_octree() {
+        let dir = std::env::temp_dir().join(format!("fathom-stereo-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for (kind, size) in [
+            (crate::render_gpu::StereoKind::Sbs, (48, 16)),
+            (crate::render_gpu::StereoKind::Ods, (32, 16)),
+        ] {
+            let p = dir.join(format!("{kind:?}.png"));
+            let mut a = args(p.to_str().unwrap(), size);
+            a.stereo = Some(kind);
+            run(a).unwrap();
+            let img = image::open(&p).unwrap();
+            let want = match kind {
+                crate::render_gpu::StereoKind::Sbs => (2 * size.0, size.1),
+                crate::render_gpu::StereoKind::Ods => (size.0, 2 * size.1),
+            };
+            assert_eq!((img.width(), img.height()), want, "{kind:?}");
+        }
+        let mut a = args(dir.join("svo.png").to_str().unwrap(), (16, 8));
+        a.stereo = Some(crate::render_gpu::StereoKind::Ods);
+        a.renderer = crate::cmd_zoom::RendererKind::Svo;
+        let e = run(a).unwrap_err();
+        assert!(e.contains("--renderer svo"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

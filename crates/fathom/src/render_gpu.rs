@@ -5,14 +5,16 @@
 //!   so and suggests the CPU path; a view zoomed past f32 precision is handed to the CPU tracer
 //!   (which switches to f64) with a note.
 //! - `--stereo sbs`: left and right views side by side (output twice as wide), eyes
-//!   `--eye-separation` apart along the camera's right axis, parallel (no toe-in). On the CPU
-//!   this renders the two views one after the other.
+//!   `--eye-separation` apart along the camera's right axis, parallel (no toe-in).
 //! - `--stereo ods`: omni-directional stereo, equirectangular 360 x 180 degrees per eye, left
 //!   eye on top (output twice as tall), the format VR headsets and 360 video players read.
-//!   GPU only for now.
+//!
+//! Both layouts run on the GPU and on the CPU tracer (`fathom_trace::Options::projection`), with
+//! the same [`Projection`] from fathom-core; the octree renderer draws mono views only.
 
 use clap::ValueEnum;
 use fathom_core::Scene;
+use fathom_core::camera::MAX_EYE_SEPARATION;
 use fathom_core::frame::Frame;
 use fathom_gpu::{GpuError, Projection, RenderOptions, Renderer};
 
@@ -33,44 +35,37 @@ pub struct Rendered {
     pub ms_total: f64,
 }
 
-/// Checks the GPU and stereo options before any output file is opened.
-pub fn check(gpu: bool, stereo: Option<StereoKind>, eye_separation: f64) -> Result<(), String> {
-    if !(eye_separation.is_finite() && (0.0..=1e6).contains(&eye_separation)) {
+/// Checks the stereo options before any output file is opened, and turns them into a
+/// [`Projection`]. `svo`: the octree renderer was chosen, which draws mono views only.
+pub fn projection(
+    stereo: Option<StereoKind>,
+    eye_separation: f64,
+    svo: bool,
+) -> Result<Projection, String> {
+    if !(eye_separation.is_finite() && (0.0..=MAX_EYE_SEPARATION).contains(&eye_separation)) {
         return Err(format!(
-            "--eye-separation = {eye_separation} is out of range [0, 1e6] (scene units)"
+            "--eye-separation = {eye_separation} is out of range [0, {MAX_EYE_SEPARATION}] (scene units)"
         ));
     }
-    if stereo == Some(StereoKind::Ods) && !gpu {
+    if svo && stereo.is_some() {
         return Err(
-            "--stereo ods renders on the GPU only for now; add --gpu (a machine without a \
-             GPU can run it through Mesa's lavapipe: scripts/setup.sh installs it)"
+            "--stereo is not supported by --renderer svo (the octree renders one mono \
+                    view); leave out --renderer svo to render stereo with the sphere tracer"
                 .into(),
         );
     }
-    Ok(())
-}
-
-/// Renders `scene` on the GPU or (for stereo without `--gpu`) on the CPU.
-pub fn render(
-    scene: &Scene,
-    cpu: &fathom_trace::Options,
-    gpu: bool,
-    stereo: Option<StereoKind>,
-    eye_separation: f64,
-) -> Result<Rendered, String> {
-    check(gpu, stereo, eye_separation)?;
-    let projection = match stereo {
+    Ok(match stereo {
         None => Projection::Mono,
         Some(StereoKind::Sbs) => Projection::SideBySide { eye_separation },
         Some(StereoKind::Ods) => Projection::Ods { eye_separation },
-    };
-    if !gpu {
-        return match stereo {
-            Some(StereoKind::Sbs) => cpu_side_by_side(scene, cpu, eye_separation),
-            Some(StereoKind::Ods) => Err("internal: ODS without --gpu passed the check".into()),
-            None => Err("internal: the GPU path was asked for a CPU mono render".into()),
-        };
-    }
+    })
+}
+
+/// Renders `scene` on the GPU with the CPU tracer's options (size per eye, projection,
+/// prepass, supersampling, SSAO). A view zoomed past f32 precision goes to the CPU tracer.
+pub fn render(scene: &Scene, cpu: &fathom_trace::Options) -> Result<Rendered, String> {
+    cpu.validate()?;
+    let projection = cpu.projection;
     let mut r = Renderer::headless().map_err(|e| e.to_string())?;
     let ss = cpu.supersample;
     let opts = RenderOptions {
@@ -109,7 +104,7 @@ pub fn render(
                 "ms": { "gpu": s.ms_gpu, "total": s.ms_total },
             }),
         }),
-        Err(GpuError::TooDeep { .. }) if stereo.is_none() => {
+        Err(GpuError::TooDeep { .. }) => {
             eprintln!(
                 "fathom: note: the view is zoomed past f32 precision; rendering on the CPU (f64)"
             );
@@ -124,87 +119,28 @@ pub fn render(
     }
 }
 
-/// Two CPU renders from cameras moved half the separation left and right (parallel axes),
-/// joined side by side.
-fn cpu_side_by_side(
-    scene: &Scene,
-    o: &fathom_trace::Options,
-    sep: f64,
-) -> Result<Rendered, String> {
-    let right = scene.camera.frame().right;
-    let mut frames = Vec::new();
-    let mut ms = 0.0;
-    for side in [-0.5, 0.5] {
-        let mut s = scene.clone();
-        s.camera.eye += right * (side * sep);
-        s.camera.target += right * (side * sep);
-        let (f, st) = fathom_trace::render(&s, o, &|_, _| {})?;
-        ms += st.ms_total;
-        frames.push(f);
-    }
-    let frame = join_side_by_side(&frames[0], &frames[1]);
-    Ok(Rendered {
-        stats: serde_json::json!({
-            "renderer": "cpu",
-            "stereo": "sbs",
-            "width": frame.width,
-            "height": frame.height,
-            "ms": { "total": ms },
-        }),
-        frame,
-        ms_total: ms,
-    })
-}
-
-/// Places two equally sized frames next to each other.
-pub fn join_side_by_side(l: &Frame, r: &Frame) -> Frame {
-    let (w, h) = (l.width, l.height);
-    let mut f = Frame::new(2 * w, h);
-    for y in 0..h {
-        for x in 0..2 * w {
-            let (src, sx) = if x < w { (l, x) } else { (r, x - w) };
-            let i = src.index(sx, y);
-            let o = f.index(x, y);
-            f.colour[o] = src.colour[i];
-            f.depth[o] = src.depth[i];
-            f.normal[o] = src.normal[i];
-            f.id[o] = src.id[i];
-            f.steps[o] = src.steps[i];
-        }
-    }
-    f
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn frames_join_left_then_right() {
-        let mut l = Frame::new(2, 1);
-        let mut r = Frame::new(2, 1);
-        l.steps = vec![1, 2];
-        r.steps = vec![3, 4];
-        let f = join_side_by_side(&l, &r);
-        assert_eq!((f.width, f.height), (4, 1));
-        assert_eq!(f.steps, vec![1, 2, 3, 4]);
-    }
-
-    #[test]
-    fn ods_without_gpu_and_bad_separation_explain_themselves() {
-        let scene = fathom_core::presets::load("mandelbulb").unwrap();
-        let o = fathom_trace::Options {
-            width: 8,
-            height: 4,
-            ..Default::default()
-        };
-        let e = render(&scene, &o, false, Some(StereoKind::Ods), 0.06)
-            .err()
-            .unwrap();
-        assert!(e.contains("--gpu"), "{e}");
-        let e = render(&scene, &o, false, Some(StereoKind::Sbs), f64::NAN)
-            .err()
-            .unwrap();
-        assert!(e.contains("eye-separation"), "{e}");
+    fn stereo_options_become_projections_or_explain_themselves() {
+        assert_eq!(projection(None, 0.065, false), Ok(Projection::Mono));
+        assert_eq!(
+            projection(Some(StereoKind::Ods), 0.1, false),
+            Ok(Projection::Ods {
+                eye_separation: 0.1
+            })
+        );
+        for sep in [f64::NAN, -1.0, 2e6] {
+            let e = projection(Some(StereoKind::Sbs), sep, false).unwrap_err();
+            assert!(e.contains("--eye-separation"), "{e}");
+        }
+        let e = projection(Some(StereoKind::Ods), 0.065, true).unwrap_err();
+        assert!(
+            e.contains("--renderer svo") && e.contains("--stereo"),
+            "{e}"
+        );
+        assert_eq!(projection(None, 0.065, true), Ok(Projection::Mono));
     }
 }

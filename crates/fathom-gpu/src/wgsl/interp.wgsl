@@ -25,67 +25,91 @@ fn eval_tape(pw: vec3f) -> Val {
     var nv = 0u;
     var nl = 0u;
     var pc = 0u;
+    var step = 0u;
     let len = arrayLength(&instrs);
-    for (var step = 0u; step < MAX_EXECUTED; step++) {
-        if pc >= len {
+    loop {
+        // The cheap instructions (stack moves, loop bounds, distance modifiers, combines) run
+        // in this tight inner loop; it leaves only for a shape or a domain operator, so the
+        // big dispatch below (every primitive, fractal and transform, all inlined) is entered
+        // once per expensive instruction instead of once per instruction. On lavapipe, which
+        // runs 8 invocations per SIMD thread, that halves the time of tapes with a tree.
+        var fam = 0u;
+        var i = 0u;
+        var a = 0u;
+        var z = 0u;
+        loop {
+            step += 1u;
+            if pc >= len || step > MAX_EXECUTED {
+                fam = 0u;
+                i = 0u;
+                break;
+            }
+            let ins = instrs[pc];
+            pc += 1u;
+            fam = ins.x >> 8u;
+            i = ins.x & 0xffu;
+            a = ins.y;
+            z = ins.z;
+            if fam == 0u {
+                if i == 0u {
+                    break;
+                } else if i == 1u {
+                    pts[np] = Pt(p, k, trap);
+                    np += 1u;
+                } else if i == 2u {
+                    np -= 1u;
+                    let s = pts[np];
+                    p = s.p;
+                    k = s.k;
+                    trap = s.trap;
+                } else if i == 3u {
+                    let n = u32(params[a]);
+                    if n == 0u {
+                        pc = z;
+                    } else {
+                        loop_rem[nl] = n;
+                        loop_body[nl] = pc;
+                        nl += 1u;
+                    }
+                } else if i == 4u {
+                    trap = min(trap, length(p));
+                    loop_rem[nl - 1u] -= 1u;
+                    if loop_rem[nl - 1u] > 0u {
+                        pc = z;
+                    } else {
+                        nl -= 1u;
+                    }
+                }
+            } else if fam == 4u {
+                top.d = op_mod(i, a, top.d, k);
+            } else if fam == 5u {
+                top = op_comb(i, a, vals[nv - 2u], top);
+                nv -= 1u;
+            } else if fam <= 3u {
+                break;
+            }
+        }
+        if fam == 0u {
+            // The end of the tape (or of the step budget).
             break;
         }
-        let ins = instrs[pc];
-        pc += 1u;
-        let fam = ins.x >> 8u;
-        let i = ins.x & 0xffu;
-        let a = ins.y;
-        if fam == 0u {
-            if i == 0u {
-                break;
-            } else if i == 1u {
-                pts[np] = Pt(p, k, trap);
-                np += 1u;
-            } else if i == 2u {
-                np -= 1u;
-                let s = pts[np];
-                p = s.p;
-                k = s.k;
-                trap = s.trap;
-            } else if i == 3u {
-                let n = u32(params[a]);
-                if n == 0u {
-                    pc = ins.z;
-                } else {
-                    loop_rem[nl] = n;
-                    loop_body[nl] = pc;
-                    nl += 1u;
-                }
-            } else if i == 4u {
-                trap = min(trap, length(p));
-                loop_rem[nl - 1u] -= 1u;
-                if loop_rem[nl - 1u] > 0u {
-                    pc = ins.z;
-                } else {
-                    nl -= 1u;
-                }
-            }
-        } else if fam == 1u {
-            let d = op_prim(i, a, p);
-            if nv > 0u {
-                vals[nv - 1u] = top;
-            }
-            top = val_solid(d * k, f32(ins.z), trap);
-            nv += 1u;
-        } else if fam == 2u {
-            let e = op_frac(i, a, p);
-            if nv > 0u {
-                vals[nv - 1u] = top;
-            }
-            top = val_solid(e.x * k, f32(ins.z), min(e.y, trap));
-            nv += 1u;
-        } else if fam == 3u {
+        if fam == 3u {
             op_xf(i, a, &p, &k);
-        } else if fam == 4u {
-            top.d = op_mod(i, a, top.d, k);
-        } else if fam == 5u {
-            top = op_comb(i, a, vals[nv - 2u], top);
-            nv -= 1u;
+        } else {
+            var d = 1e20;
+            var t = trap;
+            if fam == 1u {
+                d = op_prim(i, a, p);
+            } else {
+                let e = op_frac(i, a, p);
+                d = e.x;
+                t = min(e.y, trap);
+            }
+            if nv > 0u {
+                vals[nv - 1u] = top;
+            }
+            top = val_solid(d * k, f32(z), t);
+            nv += 1u;
         }
     }
     return top;

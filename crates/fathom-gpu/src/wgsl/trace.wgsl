@@ -72,7 +72,8 @@ fn at(r: Ray, t: f32) -> vec3f {
     return g.eye_hi.xyz + (g.eye_lo.xyz + (r.off + r.dir * t));
 }
 
-// The ray through per-eye pixel position (px, py) (pixel centres at +0.5) of eye `eye`.
+// The ray through per-eye pixel position (px, py) (pixel centres at +0.5) of eye `eye`:
+// fathom_core::camera::Projection::ray, in f32.
 fn view_ray(eye: u32, px: f32, py: f32) -> Ray {
     let w = f32(view_w());
     let h = f32(view_h());
@@ -100,7 +101,8 @@ fn view_ray(eye: u32, px: f32, py: f32) -> Ray {
     return Ray(off, dir);
 }
 
-// Cone radius at t = 0 covering the spread of ray origins over a block (ODS only).
+// Cone radius at t = 0 covering the spread of ray origins over a block (ODS only):
+// Projection::cone_base.
 fn cone_base(block: u32) -> f32 {
     if g.dims.z == 2u {
         return 0.5 * g.pal_d.w * f32(block) * 2.0 * PI / f32(view_w());
