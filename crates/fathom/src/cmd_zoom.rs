@@ -81,8 +81,8 @@ pub enum RendererKind {
 }
 
 /// `fathom render --renderer svo`: settles an octree at the scene's camera (root cube fitted
-/// to the scene inside [-4, 4]^3), renders it, applies the shared post effects (fog from the scene, `--ssao`) and
-/// writes the PNG (and the mask if asked).
+/// to the scene inside [-4, 4]^3), renders it, applies the shared post effects (fog from the
+/// scene, `--ssao`) and writes the PNG (and the mask if asked).
 pub fn render_still(
     scene: &fathom_core::Scene,
     a: &crate::cmd_render::RenderArgs,
