@@ -14,9 +14,9 @@
 //! the parent already satisfies the LOD test (corner cases and LOD agreement), then descends.
 //! The first leaf is the skip node (the leaf containing the eye), so a ray never descends from
 //! the root when the eye is inside it; with the eye outside the root, the first leaf is found
-//! from the previous ray's entry node (see [`cast_neighbour`]). When a link pointed to a coarser node, the deepest node
-//! of the descent no deeper than the link's owner replaces it (an atomic store: any valid link
-//! is correct, a better one only saves steps).
+//! from the previous ray's entry node (see [`cast_neighbour`]). When a link pointed to a
+//! coarser node, the deepest node of the descent no deeper than the link's owner replaces it
+//! (an atomic store: any valid link is correct, a better one only saves steps).
 
 use crate::evict::mark_visited;
 use crate::node::{NONE, REQUESTED};

@@ -66,6 +66,7 @@ fn zoom_args(preset: &str, t: TraversalArg, frames: usize, depth: f64, size: &st
         fidelity: 1.0,
         max_memory: "1G".into(),
         subdivide_ms: 12.0,
+        unify_every: 4,
         ssao: 0.0,
     }
 }

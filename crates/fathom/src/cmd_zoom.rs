@@ -62,6 +62,9 @@ pub struct ZoomArgs {
     /// Subdivision time per frame in ms.
     #[arg(long, default_value_t = 12.0)]
     pub subdivide_ms: f64,
+    /// Unify (unload bricks no ray visited) every this many frames, >= 1.
+    #[arg(long, default_value_t = 4)]
+    pub unify_every: u32,
     /// Screen-space ambient occlusion strength applied to written frames (the sphere
     /// tracer's post effect), [0, 4].
     #[arg(long, default_value_t = 1.0)]
@@ -78,8 +81,8 @@ pub enum RendererKind {
 }
 
 /// `fathom render --renderer svo`: settles an octree at the scene's camera (root cube fitted
-/// to the scene inside [-4, 4]^3), renders it, applies the shared post effects (fog from the scene, `--ssao`) and
-/// writes the PNG (and the mask if asked).
+/// to the scene inside [-4, 4]^3), renders it, applies the shared post effects (fog from the
+/// scene, `--ssao`) and writes the PNG (and the mask if asked).
 pub fn render_still(
     scene: &fathom_core::Scene,
     a: &crate::cmd_render::RenderArgs,
@@ -201,6 +204,7 @@ pub fn setup(a: &ZoomArgs) -> Result<(ZoomPreset, ExplorerConfig), String> {
         max_memory,
         traversal: a.traversal.into(),
         subdivide_ms: a.subdivide_ms,
+        unify_every: a.unify_every,
         root: p.root,
         ..ExplorerConfig::default()
     };
@@ -324,6 +328,7 @@ mod tests {
             fidelity: 1.0,
             max_memory: "64M".into(),
             subdivide_ms: 5.0,
+            unify_every: 4,
             ssao: 1.0,
         }
     }
@@ -340,6 +345,9 @@ mod tests {
         a.fidelity = 100.0;
         assert!(setup(&a).err().unwrap().contains("fidelity"));
         a.fidelity = 1.0;
+        a.unify_every = 0;
+        assert!(setup(&a).err().unwrap().contains("unify-every"));
+        a.unify_every = 4;
         a.max_memory = "1K".into();
         assert!(setup(&a).err().unwrap().contains("max memory"));
     }
