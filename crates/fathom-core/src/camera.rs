@@ -142,12 +142,13 @@ impl Projection {
         if self == Projection::Mono { 1 } else { 2 }
     }
 
-    /// Output size for a per-eye view of `w` x `h`.
+    /// Output size for a per-eye view of `w` x `h`. Saturates at `u32::MAX` instead of
+    /// wrapping, so a huge requested size still fails the callers' size limits.
     pub fn output_size(self, w: u32, h: u32) -> (u32, u32) {
         match self {
             Projection::Mono => (w, h),
-            Projection::SideBySide { .. } => (2 * w, h),
-            Projection::Ods { .. } => (w, 2 * h),
+            Projection::SideBySide { .. } => (w.saturating_mul(2), h),
+            Projection::Ods { .. } => (w, h.saturating_mul(2)),
         }
     }
 
@@ -227,8 +228,8 @@ impl Projection {
         use std::f64::consts::PI;
         match self {
             Projection::Mono => (DVec3::ZERO, frame.ray_dir(px, py, w, h)),
-            Projection::SideBySide { eye_separation } => (
-                frame.right * (side(eye) * 0.5 * eye_separation),
+            Projection::SideBySide { .. } => (
+                self.eye_offset(frame, eye).unwrap_or_default(),
                 frame.ray_dir(px, py, w, h),
             ),
             Projection::Ods { eye_separation } => {

@@ -155,12 +155,13 @@ impl Gpu {
 
     /// Errors out when the device-lost callback has fired, or wgpu reported an error
     /// outside an error scope (a destroyed device, for one, reports only that way until the
-    /// next poll fires the lost callback).
+    /// next poll fires the lost callback). A lost device stays lost; an uncaptured error is
+    /// reported once, so one failed frame does not disable a long-lived renderer.
     pub fn check_lost(&self) -> Result<(), GpuError> {
         if let Some(m) = self.lost.lock().ok().and_then(|g| g.clone()) {
             return Err(GpuError::DeviceLost(m));
         }
-        match self.uncaptured.lock().ok().and_then(|g| g.clone()) {
+        match self.uncaptured.lock().ok().and_then(|mut g| g.take()) {
             Some(m) => Err(GpuError::Driver {
                 what: "a GPU command".into(),
                 message: m,

@@ -95,6 +95,23 @@ impl Shader {
         }
     }
 
+    /// The corner test of estimate scenes: whether any corner of the cube `centre +
+    /// [-half, half]^3` is inside (or NaN, never a false negative). Always false for scenes
+    /// whose distance is a bound, where the centre test alone is conservative.
+    pub fn corner_inside(&self, ev: &mut Evaluator<f64>, centre: DVec3, half: f64) -> bool {
+        self.corner_test
+            && (0..8).any(|k| {
+                let p = centre
+                    + DVec3::new(
+                        if k & 1 == 0 { -half } else { half },
+                        if k & 2 == 0 { -half } else { half },
+                        if k & 4 == 0 { -half } else { half },
+                    );
+                let d = ev.distance(&self.tape, V3::new(p.x, p.y, p.z));
+                d <= 0.0 || d.is_nan()
+            })
+    }
+
     /// The full test on an evaluated value `v` at world centre `c` (half-diagonal `hd`).
     #[inline]
     pub fn full_value(&self, v: &fathom_core::Value<f64>, c: DVec3, hd: f64) -> bool {

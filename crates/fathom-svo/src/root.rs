@@ -5,7 +5,7 @@
 //! root (so rays can never enter the sponge through a root face), and the voxel grid does not
 //! line up with the sponge's own faces. [`RootSpec::Fit`] shrinks a search cube to the scene:
 //! it subdivides the cube [`FIT_LEVELS`] levels with the same conservative full test the octree
-//! uses (no false negatives), keeping only full cells, and takes the bounding cube of the full
+//! uses (no false negatives; for estimate scenes, the corner test too), keeping only full cells, and takes the bounding cube of the full
 //! cells. Since every voxel the surface crosses tests full, the fitted root contains the whole
 //! surface (and the solid), padded by up to one cell of the search grid. When an exact
 //! bounding cube is known (the Menger sponge), [`RootSpec::Cube`] gives it.
@@ -85,7 +85,10 @@ pub fn fit_bounds(sh: &Shader, half: f64, levels: u32) -> Option<(DVec3, DVec3)>
         let s = 2.0 * half / (1u64 << level) as f64;
         let centre =
             DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * s + DVec3::splat(-half + 0.5 * s);
+        // The same test as generation, corner test of estimate scenes included, so the fit
+        // cannot cut off a surface the octree would have kept.
         sh.full(ev, centre, 0.5 * s * 3f64.sqrt()).is_some()
+            || sh.corner_inside(ev, centre, 0.5 * s)
     };
     let mut ev = Evaluator::<f64>::new();
     if !full(&mut ev, [0; 3], 0) {
@@ -155,7 +158,8 @@ mod tests {
         assert!(size < 3.0, "mandelbulb root side {size}");
         let mut ev = Evaluator::<f64>::new();
         // Rays from far away towards the centre: where each first reaches the surface is
-        // inside the root.
+        // inside the root. Every ray aims at the bulb's centre, so every ray must get there.
+        let mut reached = 0;
         for i in 0..200 {
             let th = i as f64 * 2.399_963;
             let z = 1.0 - 2.0 * (i as f64 + 0.5) / 200.0;
@@ -172,11 +176,13 @@ mod tests {
                         u.min_element() > 0.0 && u.max_element() < 1.0,
                         "{p} outside"
                     );
+                    reached += 1;
                     break;
                 }
                 t += d;
             }
         }
+        assert_eq!(reached, 200, "rays that never reached the surface");
         assert_eq!(
             RootSpec::centred(1.0).resolve(&sh),
             (DVec3::splat(-1.0), 2.0)

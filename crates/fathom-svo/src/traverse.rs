@@ -117,7 +117,9 @@ fn enter_root(r: &Ray) -> Option<(f64, [f64; 3])> {
     if t0 > t1 {
         return None;
     }
-    let mut p = point(r, t0);
+    // Clamp into the root like `exit` does: within an ulp of a root edge, `o + t0 d` can round
+    // outside, which would turn a hit on a root face into a miss.
+    let mut p = point(r, t0).map(|c| c.clamp(0.0, 1f64.next_down()));
     if axis < 3 {
         p[axis] = if r.d[axis] > 0.0 {
             0.0
@@ -311,8 +313,8 @@ pub fn cast_neighbour(
         if nb == NONE {
             return Hit::miss(steps);
         }
-        // The exit point lies in the same-size box across the face unless it left through an
-        // edge or corner; only then is the link's improvement well defined.
+        // `exit` clamps the exit point into the same-size box across the face, so this only
+        // guards against NaN; the link's improvement is defined for points in that box.
         let axis = f >> 1;
         let s = b.dim();
         let inside = (0..3).all(|a| a == axis || (p1[a] >= b.min[a] && p1[a] < b.min[a] + s));

@@ -231,7 +231,7 @@ pub fn render(
         views.push(frame);
     }
     stats.deep = deep;
-    let frame = crate::stereo::assemble(projection, &views);
+    let frame = crate::stereo::assemble(projection, views);
     stats.width = frame.width;
     stats.height = frame.height;
     stats.ms_total = start.elapsed().as_secs_f64() * 1e3;

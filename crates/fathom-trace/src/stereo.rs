@@ -6,11 +6,11 @@ use fathom_core::Projection;
 use fathom_core::frame::Frame;
 
 /// Lays out equally sized per-eye `views` (one for mono, left then right for stereo) in the
-/// output frame of `projection`.
-pub fn assemble(projection: Projection, views: &[Frame]) -> Frame {
+/// output frame of `projection`. A mono view is returned as it is, without a copy.
+pub fn assemble(projection: Projection, mut views: Vec<Frame>) -> Frame {
     assert_eq!(views.len(), projection.eyes() as usize, "one view per eye");
     if views.len() == 1 {
-        return views[0].clone();
+        return views.pop().expect("one view");
     }
     let (w, h) = (views[0].width, views[0].height);
     let (ow, oh) = projection.output_size(w, h);
@@ -65,7 +65,7 @@ mod tests {
         let sbs = Projection::SideBySide {
             eye_separation: 0.1,
         };
-        let f = assemble(sbs, &[l.clone(), r.clone()]);
+        let f = assemble(sbs, vec![l.clone(), r.clone()]);
         assert_eq!(
             (f.width, f.height, f.steps.clone()),
             (4, 1, vec![1, 2, 3, 4])
@@ -73,7 +73,7 @@ mod tests {
         let ods = Projection::Ods {
             eye_separation: 0.1,
         };
-        let f = assemble(ods, &[l, r]);
+        let f = assemble(ods, vec![l, r]);
         assert_eq!((f.width, f.height, f.steps), (2, 2, vec![1, 2, 3, 4]));
     }
 
@@ -293,6 +293,24 @@ mod tests {
             };
             let e = render(&scene, &o, &|_, _| {}).unwrap_err();
             assert!(e.contains("eye separation"), "{e}");
+        }
+        // A size whose doubled output would overflow u32 is refused, not wrapped.
+        for projection in [
+            Projection::SideBySide {
+                eye_separation: 0.1,
+            },
+            Projection::Ods {
+                eye_separation: 0.1,
+            },
+        ] {
+            let o = Options {
+                width: 1 << 31,
+                height: 1 << 31,
+                projection,
+                ..Options::default()
+            };
+            let e = render(&scene, &o, &|_, _| {}).unwrap_err();
+            assert!(e.contains("limit"), "{e}");
         }
         // The output size counts: two 16384-wide views side by side exceed the limit.
         let o = Options {
