@@ -79,10 +79,17 @@ impl Options {
             ));
         }
         self.projection.validate()?;
-        let (ow, oh) = self.projection.output_size(self.width, self.height);
-        if self.width > MAX_SIDE || self.height > MAX_SIDE || ow > MAX_SIDE || oh > MAX_SIDE {
+        if self.width > MAX_SIDE || self.height > MAX_SIDE {
             return Err(format!(
-                "image size {ow}x{oh} exceeds the limit of {MAX_SIDE} pixels per side"
+                "image size {}x{} exceeds the limit of {MAX_SIDE} pixels per side",
+                self.width, self.height
+            ));
+        }
+        let (ow, oh) = self.projection.output_size(self.width, self.height);
+        if ow > MAX_SIDE || oh > MAX_SIDE {
+            return Err(format!(
+                "stereo output size {ow}x{oh} ({}x{} per eye) exceeds the limit of {MAX_SIDE} pixels per side",
+                self.width, self.height
             ));
         }
         if !(1..=MAX_SUPERSAMPLE).contains(&self.supersample) {
