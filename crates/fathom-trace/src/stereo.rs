@@ -36,6 +36,36 @@ pub fn assemble(projection: Projection, mut views: Vec<Frame>) -> Frame {
     f
 }
 
+/// The per-eye views of an output frame of `projection`: the inverse of [`assemble`], so
+/// screen-space post effects can run on each eye's view of a frame rendered whole (the GPU's).
+pub fn split(projection: Projection, frame: Frame) -> Vec<Frame> {
+    let eyes = projection.eyes();
+    if eyes == 1 {
+        return vec![frame];
+    }
+    let (w, h) = match projection {
+        Projection::SideBySide { .. } => (frame.width / 2, frame.height),
+        _ => (frame.width, frame.height / 2),
+    };
+    (0..eyes)
+        .map(|eye| {
+            let mut v = Frame::new(w, h);
+            for y in 0..h {
+                for x in 0..w {
+                    let (ox, oy) = projection.output_pixel(eye, x, y, w, h);
+                    let (i, o) = (v.index(x, y), frame.index(ox, oy));
+                    v.colour[i] = frame.colour[o];
+                    v.depth[i] = frame.depth[o];
+                    v.normal[i] = frame.normal[o];
+                    v.id[i] = frame.id[o];
+                    v.steps[i] = frame.steps[o];
+                }
+            }
+            v
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -73,8 +103,17 @@ mod tests {
         let ods = Projection::Ods {
             eye_separation: 0.1,
         };
-        let f = assemble(ods, vec![l, r]);
-        assert_eq!((f.width, f.height, f.steps), (2, 2, vec![1, 2, 3, 4]));
+        let f = assemble(ods, vec![l.clone(), r.clone()]);
+        assert_eq!(
+            (f.width, f.height, f.steps.clone()),
+            (2, 2, vec![1, 2, 3, 4])
+        );
+        // split undoes assemble.
+        assert_eq!(split(ods, f), vec![l.clone(), r.clone()]);
+        assert_eq!(
+            split(sbs, assemble(sbs, vec![l.clone(), r.clone()])),
+            vec![l, r]
+        );
     }
 
     /// A small sphere of radius `r` at distance `dist` straight ahead of a camera at the origin.

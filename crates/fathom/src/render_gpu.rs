@@ -77,10 +77,15 @@ pub fn render(scene: &Scene, cpu: &fathom_trace::Options) -> Result<Rendered, St
     match r.render_scene(scene, &opts) {
         Ok((mut frame, s)) => Ok(Rendered {
             frame: {
-                // The CPU path's post effects, on the GPU's frame.
-                if cpu.ssao > 0.0 && projection == Projection::Mono {
-                    let pa = scene.camera.frame().pixel_angle(opts.height);
-                    fathom_trace::post::ssao(&mut frame, cpu.ssao, pa as f32);
+                // The CPU path's post effects, on the GPU's frame: SSAO on each eye's view,
+                // as the CPU tracer does (none for ODS, whose screen wraps around).
+                if cpu.ssao > 0.0 && !matches!(projection, Projection::Ods { .. }) {
+                    let pa = scene.camera.frame().pixel_angle(opts.height) as f32;
+                    let mut views = fathom_trace::stereo::split(projection, frame);
+                    for v in &mut views {
+                        fathom_trace::post::ssao(v, cpu.ssao, pa);
+                    }
+                    frame = fathom_trace::stereo::assemble(projection, views);
                 }
                 if ss > 1 {
                     frame = fathom_trace::post::downsample(&frame, ss);
