@@ -139,6 +139,24 @@ fn point(r: &Ray, t: f64) -> [f64; 3] {
     ]
 }
 
+/// `x.next_down()` for the box coordinates `exit` uses (finite, `>= 0`), without the NaN and
+/// infinity checks of the general function: one integer decrement for `x > 0`.
+#[inline(always)]
+fn below(x: f64) -> f64 {
+    if x > 0.0 {
+        f64::from_bits(x.to_bits() - 1)
+    } else {
+        x.next_down()
+    }
+}
+
+/// `x.clamp(lo, hi)` without its `lo <= hi` assertion (NaN stays NaN, as with `clamp`).
+#[inline(always)]
+fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
+    let y = if x < lo { lo } else { x };
+    if y > hi { hi } else { y }
+}
+
 /// Exit distance of the ray from box `b`, the exit face, and the point just across it.
 #[inline(always)]
 fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
@@ -164,7 +182,7 @@ fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
     let face = if pos {
         b.min[axis] + s
     } else {
-        b.min[axis].next_down()
+        below(b.min[axis])
     };
     // Built component by component (no indexed store into an array that is then read whole:
     // that stalls store forwarding in this hot loop). The other coordinates are clamped into
@@ -175,7 +193,7 @@ fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
         if a == axis {
             face
         } else {
-            (r.o[a] + t * r.d[a]).clamp(b.min[a], (b.min[a] + s).next_down())
+            clamp(r.o[a] + t * r.d[a], b.min[a], below(b.min[a] + s))
         }
     };
     let p = [c(0), c(1), c(2)];
@@ -315,11 +333,12 @@ pub fn cast_neighbour(
         }
         // `exit` clamps the exit point into the same-size box across the face, so this only
         // guards against NaN; the link's improvement is defined for points in that box.
-        let axis = f >> 1;
-        let s = b.dim();
-        let inside = (0..3).all(|a| a == axis || (p1[a] >= b.min[a] && p1[a] < b.min[a] + s));
         let nd = nodes[nb as usize].depth;
-        opt = if inside && nd < b.depth {
+        let inside = || {
+            let (axis, s) = (f >> 1, b.dim());
+            (0..3).all(|a| a == axis || (p1[a] >= b.min[a] && p1[a] < b.min[a] + s))
+        };
+        opt = if nd < b.depth && inside() {
             Some((id, f, b.depth, nb))
         } else {
             None

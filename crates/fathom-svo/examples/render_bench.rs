@@ -1,0 +1,62 @@
+//! Render-phase micro benchmark: builds a tree deterministically along a zoom (fixed number of
+//! subdivisions per frame, no time budget), then times the render phase alone at chosen frames
+//! (min and median of repeated renders of the same frozen tree) and prints an image checksum.
+//!
+//! `cargo run --release -p fathom-svo --example render_bench -- mandelbulb 300 1e11 [threads]`
+
+use fathom_svo::explorer::{Explorer, ExplorerConfig, Traversal};
+use fathom_svo::zoom;
+use std::time::Instant;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map(String::as_str).unwrap_or("mandelbulb");
+    let frames: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(300);
+    let depth: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1e11);
+    let threads: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(2);
+    let trav = match args.get(5).map(String::as_str) {
+        Some("kdrestart") => Traversal::KdRestart,
+        _ => Traversal::Neighbour,
+    };
+    let reps = 15;
+    let p = zoom::preset(name).unwrap();
+    let cfg = ExplorerConfig {
+        threads,
+        subdivide_ms: 0.0,
+        min_subdivisions: 1700,
+        root: p.root,
+        traversal: trav,
+        ..ExplorerConfig::default()
+    };
+    let mut ex = Explorer::new(&p.scene, cfg).unwrap();
+    let checkpoints = [frames / 3, 2 * frames / 3, frames - 1];
+    let mut total_min = 0.0;
+    for i in 0..frames {
+        let cam = p.camera(i, frames, depth);
+        if checkpoints.contains(&i) {
+            let mut times = Vec::new();
+            let mut sum = 0u64;
+            let mut npr = 0.0;
+            for _ in 0..reps {
+                let t0 = Instant::now();
+                let (img, reqs, c) = ex.render(&cam);
+                times.push(t0.elapsed().as_secs_f64() * 1e3);
+                ex.release_requests(&reqs);
+                npr = c[2] as f64 / c[0] as f64;
+                sum = img.colour.iter().zip(&img.depth).fold(0u64, |h, (&c, &d)| {
+                    (h ^ (c as u64) ^ ((d.to_bits() as u64) << 32)).wrapping_mul(0x100000001b3)
+                });
+            }
+            times.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            total_min += times[0];
+            println!(
+                "{name} frame {i}: render min {:.2} ms median {:.2} ms, {npr:.2} nodes/ray, {} nodes, checksum {sum:016x}",
+                times[0],
+                times[reps / 2],
+                ex.tree.counts().nodes
+            );
+        }
+        ex.step(&cam);
+    }
+    println!("{name}: sum of min render ms {total_min:.2}");
+}
