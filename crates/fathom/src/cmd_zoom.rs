@@ -26,7 +26,20 @@ impl From<TraversalArg> for Traversal {
     }
 }
 
+/// Explore with the sparse voxel octree along a zoom or tour; write frames and stats.
+///
+/// Detail is generated as the camera approaches (a fixed subdivision time per frame), bricks no
+/// ray visited are unloaded to stay within --max-memory, and a zoom past f64 precision stops
+/// with a message instead of rendering garbage. Prints a one-line summary at the end.
+///
+/// Examples:
+///   fathom zoom --preset menger --depth 1e11 --frames 300 --stats zoom.json
+///   fathom zoom --preset mandelbulb --frames 600 -o frames/        (PNG per frame)
+///   fathom zoom --preset menger --traversal kdrestart --stats kd.json   (the baseline)
+///   fathom zoom --preset menger-tour --frames 900 --size 1280x720 -o tour/
+///   ffmpeg -framerate 30 -i frames/frame_%05d.png zoom.mp4              (frames to a video)
 #[derive(Args, Clone)]
+#[command(verbatim_doc_comment)]
 pub struct ZoomArgs {
     /// Path preset: menger (zoom into the corner, a point of recursion), mandelbulb (zoom
     /// into a surface point), menger-tour (a flight around and into the sponge).

@@ -35,13 +35,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene file or preset to an image.
+    // Render and Zoom take their help (summary, then examples) from their argument structs; a
+    // doc comment here would replace it.
     Render(Box<cmd_render::RenderArgs>),
     /// List presets, primitives, operators or fractals with their parameters.
     List(cmd_list::ListArgs),
     /// Print a preset (or a scene file, normalised) as scene-file text.
     Scene(cmd_scene::SceneArgs),
-    /// Explore with the sparse voxel octree along a zoom or tour; write frames and stats.
     Zoom(cmd_zoom::ZoomArgs),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
@@ -63,5 +63,27 @@ fn main() -> ExitCode {
             eprintln!("fathom: error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn every_command_help_teaches_by_example() {
+        let mut cli = Cli::command();
+        cli.build();
+        for name in ["render", "zoom", "list", "scene"] {
+            let sub = cli.find_subcommand_mut(name).unwrap();
+            let help = sub.render_long_help().to_string();
+            let example = format!("\n  fathom {name} ");
+            assert!(
+                help.contains(&example),
+                "{name} --help has no example:\n{help}"
+            );
+        }
+        cli.debug_assert();
     }
 }
