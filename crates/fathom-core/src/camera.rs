@@ -137,6 +137,12 @@ impl Projection {
         }
     }
 
+    /// Whether screen-space post effects (SSAO) apply to each eye's view: not for ODS, whose
+    /// view wraps around at the seam and stretches towards the poles.
+    pub fn screen_space(self) -> bool {
+        !matches!(self, Projection::Ods { .. })
+    }
+
     /// Number of views: 1 or 2.
     pub fn eyes(self) -> u32 {
         if self == Projection::Mono { 1 } else { 2 }

@@ -53,6 +53,17 @@ impl Frame {
         y as usize * self.width as usize + x as usize
     }
 
+    /// Copies every buffer's pixel `j` of `src` into pixel `i` of this frame (how frames are
+    /// laid out and taken apart, one place that knows every buffer).
+    #[inline]
+    pub fn copy_pixel(&mut self, i: usize, src: &Frame, j: usize) {
+        self.colour[i] = src.colour[j];
+        self.depth[i] = src.depth[j];
+        self.normal[i] = src.normal[j];
+        self.id[i] = src.id[j];
+        self.steps[i] = src.steps[j];
+    }
+
     /// Whether the ray through pixel `i` hit a surface.
     #[inline]
     pub fn is_hit(&self, i: usize) -> bool {

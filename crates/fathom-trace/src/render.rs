@@ -223,8 +223,7 @@ pub fn render(
         };
         stats.add(&s);
         let t_post = Instant::now();
-        let screen_space = !matches!(projection, Projection::Ods { .. });
-        if opts.ssao > 0.0 && !opts.geometry_only && screen_space {
+        if opts.ssao > 0.0 && !opts.geometry_only && projection.screen_space() {
             post::ssao(&mut frame, opts.ssao, pixel_angle as f32);
         }
         if r.fog > 0.0 && !opts.geometry_only {

@@ -25,11 +25,7 @@ pub fn assemble(projection: Projection, mut views: Vec<Frame>) -> Frame {
             for x in 0..w {
                 let (ox, oy) = projection.output_pixel(eye as u32, x, y, w, h);
                 let (i, o) = (v.index(x, y), f.index(ox, oy));
-                f.colour[o] = v.colour[i];
-                f.depth[o] = v.depth[i];
-                f.normal[o] = v.normal[i];
-                f.id[o] = v.id[i];
-                f.steps[o] = v.steps[i];
+                f.copy_pixel(o, v, i);
             }
         }
     }
@@ -54,11 +50,7 @@ pub fn split(projection: Projection, frame: Frame) -> Vec<Frame> {
                 for x in 0..w {
                     let (ox, oy) = projection.output_pixel(eye, x, y, w, h);
                     let (i, o) = (v.index(x, y), frame.index(ox, oy));
-                    v.colour[i] = frame.colour[o];
-                    v.depth[i] = frame.depth[o];
-                    v.normal[i] = frame.normal[o];
-                    v.id[i] = frame.id[o];
-                    v.steps[i] = frame.steps[o];
+                    v.copy_pixel(i, &frame, o);
                 }
             }
             v

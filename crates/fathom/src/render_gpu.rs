@@ -79,8 +79,9 @@ pub fn render(scene: &Scene, cpu: &fathom_trace::Options) -> Result<Rendered, St
             frame: {
                 // The CPU path's post effects, on the GPU's frame: SSAO on each eye's view,
                 // as the CPU tracer does (none for ODS, whose screen wraps around).
-                if cpu.ssao > 0.0 && !matches!(projection, Projection::Ods { .. }) {
-                    let pa = scene.camera.frame().pixel_angle(opts.height) as f32;
+                if cpu.ssao > 0.0 && projection.screen_space() {
+                    let cam = projection.frame(&scene.camera);
+                    let pa = projection.pixel_angle(&cam, opts.width, opts.height) as f32;
                     let mut views = fathom_trace::stereo::split(projection, frame);
                     for v in &mut views {
                         fathom_trace::post::ssao(v, cpu.ssao, pa);
