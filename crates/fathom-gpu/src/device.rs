@@ -36,17 +36,7 @@ impl Gpu {
     /// tests use, so that a machine without Vulkan fails loudly instead of silently falling
     /// back to a slow GL emulation.
     pub fn headless_vulkan() -> Result<Gpu, GpuError> {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        if std::env::var_os("WGPU_BACKEND").is_none() {
-            desc.backends = wgpu::Backends::VULKAN;
-        }
-        let backends = desc.backends;
-        Self::with_limits(&wgpu::Instance::new(desc), None, |_| {}).map_err(|e| match e {
-            GpuError::NoAdapter { .. } => GpuError::NoAdapter {
-                backends: format!("{backends:?}"),
-            },
-            e => e,
-        })
+        Self::headless_vulkan_limited(|_| {})
     }
 
     /// Like [`Gpu::headless_vulkan`], with the device's limits lowered by `shrink` from the
@@ -59,7 +49,13 @@ impl Gpu {
         if std::env::var_os("WGPU_BACKEND").is_none() {
             desc.backends = wgpu::Backends::VULKAN;
         }
-        Self::with_limits(&wgpu::Instance::new(desc), None, shrink)
+        let backends = desc.backends;
+        Self::with_limits(&wgpu::Instance::new(desc), None, shrink).map_err(|e| match e {
+            GpuError::NoAdapter { .. } => GpuError::NoAdapter {
+                backends: format!("{backends:?}"),
+            },
+            e => e,
+        })
     }
 
     /// A device that can present to `surface` (pass `None` for headless).

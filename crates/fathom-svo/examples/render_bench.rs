@@ -19,7 +19,10 @@ fn main() {
         _ => Traversal::Neighbour,
     };
     let reps = 15;
-    let p = zoom::preset(name).unwrap();
+    let p = zoom::preset(name).unwrap_or_else(|e| {
+        eprintln!("render_bench: {e}");
+        std::process::exit(2)
+    });
     let cfg = ExplorerConfig {
         threads,
         subdivide_ms: 0.0,

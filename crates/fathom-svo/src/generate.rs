@@ -101,15 +101,17 @@ impl Shader {
     pub fn corner_inside(&self, ev: &mut Evaluator<f64>, centre: DVec3, half: f64) -> bool {
         self.corner_test
             && (0..8).any(|k| {
-                let p = centre
-                    + DVec3::new(
-                        if k & 1 == 0 { -half } else { half },
-                        if k & 2 == 0 { -half } else { half },
-                        if k & 4 == 0 { -half } else { half },
-                    );
-                let d = ev.distance(&self.tape, V3::new(p.x, p.y, p.z));
-                d <= 0.0 || d.is_nan()
+                let sign = |bit: i32| if k & bit == 0 { -half } else { half };
+                self.inside(ev, centre + DVec3::new(sign(1), sign(2), sign(4)))
             })
+    }
+
+    /// Whether world point `p` is inside the surface, or its distance is NaN (never a false
+    /// negative): the corner test's question.
+    #[inline]
+    pub fn inside(&self, ev: &mut Evaluator<f64>, p: DVec3) -> bool {
+        let d = ev.distance(&self.tape, V3::new(p.x, p.y, p.z));
+        d <= 0.0 || d.is_nan()
     }
 
     /// The full test on an evaluated value `v` at world centre `c` (half-diagonal `hd`).
@@ -197,12 +199,7 @@ pub fn eval_children(
                         b.min[1] + h * ijk[1] as f64,
                         b.min[2] + h * ijk[2] as f64,
                     );
-                    let p = tree.root_min + u * tree.root_size;
-                    {
-                        // Inside, or NaN (never a false negative).
-                        let d = ev.distance(&sh.tape, V3::new(p.x, p.y, p.z));
-                        d <= 0.0 || d.is_nan()
-                    }
+                    sh.inside(ev, tree.root_min + u * tree.root_size)
                 })
             });
         }

@@ -118,8 +118,9 @@ pub fn preset(name: &str) -> Result<ZoomPreset, String> {
 }
 
 /// The zoom target of a scene's view (it follows the camera, so a preset that is reframed keeps
-/// a target in view; no hard-coded aim point): the surface point of the camera's centre ray, or, if that misses, of the first ray that hits on a spiral of image
-/// points around the centre.
+/// a target in view; no hard-coded aim point): the surface point of the camera's centre ray,
+/// or, if that misses, of the first ray that hits on a spiral of image points around the
+/// centre.
 pub fn view_target(tape: &Tape, cam: &Camera) -> Option<DVec3> {
     let f = cam.frame();
     (0..64).find_map(|i| {
