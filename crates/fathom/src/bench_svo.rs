@@ -59,15 +59,10 @@ fn zoom_args(preset: &str, t: TraversalArg, frames: usize, depth: f64, size: &st
         depth,
         frames,
         size: size.into(),
-        output: None,
-        stats: None,
         traversal: t,
         threads: 2,
-        fidelity: 1.0,
-        max_memory: "1G".into(),
-        subdivide_ms: 12.0,
-        unify_every: 4,
         ssao: 0.0,
+        ..crate::clap_defaults()
     }
 }
 

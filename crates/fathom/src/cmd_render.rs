@@ -271,21 +271,16 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
-/// What `fathom` with no arguments does: render the default preset to ./fathom.png at
-/// 1280x720 and say where it went.
 impl RenderArgs {
     /// The arguments of a bare `fathom render`, taken from the clap declarations so a new flag
     /// needs no second default here.
     pub fn defaults() -> RenderArgs {
-        #[derive(clap::Parser)]
-        struct Bare {
-            #[command(flatten)]
-            args: RenderArgs,
-        }
-        <Bare as clap::Parser>::parse_from(["render"]).args
+        crate::clap_defaults()
     }
 }
 
+/// What `fathom` with no arguments does: render the default preset to ./fathom.png at
+/// 1280x720 and say where it went.
 pub fn run_default() -> Result<(), String> {
     let start = Instant::now();
     let a = RenderArgs {

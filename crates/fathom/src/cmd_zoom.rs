@@ -330,19 +330,13 @@ mod tests {
 
     fn args() -> ZoomArgs {
         ZoomArgs {
-            preset: "menger".into(),
             depth: 1e3,
             frames: 3,
             size: "32x24".into(),
-            output: None,
-            stats: None,
-            traversal: TraversalArg::Neighbour,
             threads: 1,
-            fidelity: 1.0,
             max_memory: "64M".into(),
             subdivide_ms: 5.0,
-            unify_every: 4,
-            ssao: 1.0,
+            ..crate::clap_defaults()
         }
     }
 

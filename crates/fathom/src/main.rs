@@ -47,6 +47,17 @@ enum Command {
     Bench(bench::BenchArgs),
 }
 
+/// The arguments of a command given no flags, from its clap declarations (every flag has a
+/// default): code that builds arguments states only what differs, so a new flag needs no
+/// second default.
+pub fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
+    let cmd = T::augment_args(clap::Command::new("fathom"));
+    let m = cmd
+        .try_get_matches_from(["fathom"])
+        .expect("every flag has a default");
+    T::from_arg_matches(&m).expect("every flag has a default")
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
