@@ -1,0 +1,24 @@
+//! fathom-volume: density grids, a volume path tracer and a 3D physarum simulation.
+//!
+//! - [`grid`]: dense grids (u32 trail counts, f32 densities) in a world box, nearest and
+//!   trilinear lookup with Mitsuba 3's conventions; [`vol_file`] (Mitsuba's `.vol`) and
+//!   [`raw_file`] (fathom's raw format) read and write them, checking sizes before allocating;
+//! - [`fractal`]: any scene's tape sampled into a density grid (density where the distance is
+//!   negative, optionally smoothed);
+//! - [`majorant`]: the coarse grid of per-block maxima and its 3D DDA; [`medium`]: delta
+//!   tracking (free flights) and ratio tracking (transmittance) against it; [`phase`]:
+//!   Henyey-Greenstein; [`light`]: environment, sun, emission;
+//! - [`integrator`]: one camera path (next-event estimation with MIS, Russian roulette);
+//!   [`render`]: progressive, deterministic images over rayon;
+//! - [`physarum`]: the agent simulation that grows a network in a trail grid.
+//!
+//! See `docs/volume.md` for the design and the measurements.
+
+pub mod error;
+mod file_io;
+pub mod grid;
+pub mod raw_file;
+pub mod vol_file;
+
+pub use error::VolumeError;
+pub use grid::{DensityGrid, Grid, TrailGrid, WorldBox};
