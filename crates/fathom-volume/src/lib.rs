@@ -17,7 +17,14 @@
 pub mod error;
 mod file_io;
 pub mod grid;
+pub mod integrator;
+pub mod light;
+pub mod majorant;
+pub mod medium;
+pub mod phase;
 pub mod raw_file;
+pub mod render;
+pub mod sampling;
 pub mod vol_file;
 
 pub use error::VolumeError;
