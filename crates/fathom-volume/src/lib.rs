@@ -16,12 +16,14 @@
 
 pub mod error;
 mod file_io;
+pub mod fractal;
 pub mod grid;
 pub mod integrator;
 pub mod light;
 pub mod majorant;
 pub mod medium;
 pub mod phase;
+pub mod physarum;
 pub mod raw_file;
 pub mod render;
 pub mod sampling;
