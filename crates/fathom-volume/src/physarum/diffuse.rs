@@ -20,25 +20,34 @@ fn neighbours(i: usize, n: usize, b: Boundary) -> (usize, usize) {
     }
 }
 
-/// The x-y 3x3 box sum of plane `z` of `src` into `out` (`tmp` holds the x sums).
-fn plane_sum(src: &[u32], res: [usize; 3], z: usize, b: Boundary, tmp: &mut [f32], out: &mut [f32]) {
-    let [rx, ry, _] = res;
-    let plane = &src[z * rx * ry..(z + 1) * rx * ry];
-    for y in 0..ry {
-        let row = &plane[y * rx..(y + 1) * rx];
-        let t = &mut tmp[y * rx..(y + 1) * rx];
-        for x in 1..rx.saturating_sub(1) {
-            t[x] = row[x - 1] as f32 + row[x] as f32 + row[x + 1] as f32;
+/// Work buffers of one task: a row as f32, the x sums of a plane, and the ring of three x-y
+/// sums (planes z - 1, z, z + 1 at slots `z % 3`).
+struct Buffers {
+    row: Vec<f32>,
+    xsum: Vec<f32>,
+    ring: [Vec<f32>; 3],
+}
+
+/// The x-y 3x3 box sum of `plane` (`rx` x `ry`) into `out`.
+fn plane_sum(plane: &[u32], rx: usize, ry: usize, b: Boundary, row: &mut [f32], xsum: &mut [f32], out: &mut [f32]) {
+    for (src, t) in plane.chunks_exact(rx).zip(xsum.chunks_exact_mut(rx)) {
+        for (f, &v) in row.iter_mut().zip(src) {
+            *f = v as f32;
+        }
+        if rx >= 3 {
+            for (o, w) in t[1..rx - 1].iter_mut().zip(row.windows(3)) {
+                *o = w[0] + w[1] + w[2];
+            }
         }
         for x in [0, rx - 1] {
             let (a, c) = neighbours(x, rx, b);
-            t[x] = row[a] as f32 + row[x] as f32 + row[c] as f32;
+            t[x] = row[a] + row[x] + row[c];
         }
     }
-    for y in 0..ry {
+    for (y, o) in out.chunks_exact_mut(rx).enumerate() {
         let (a, c) = neighbours(y, ry, b);
-        let (ta, tb, tc) = (&tmp[a * rx..(a + 1) * rx], &tmp[y * rx..(y + 1) * rx], &tmp[c * rx..(c + 1) * rx]);
-        for (((o, &p), &q), &r) in out[y * rx..(y + 1) * rx].iter_mut().zip(ta).zip(tb).zip(tc) {
+        let (ta, tb, tc) = (&xsum[a * rx..][..rx], &xsum[y * rx..][..rx], &xsum[c * rx..][..rx]);
+        for (((o, &p), &q), &r) in o.iter_mut().zip(ta).zip(tb).zip(tc) {
             *o = p + q + r;
         }
     }
@@ -46,11 +55,11 @@ fn plane_sum(src: &[u32], res: [usize; 3], z: usize, b: Boundary, tmp: &mut [f32
 
 /// `dst = decay * ((1 - diffusion) src + diffusion * box3(src))`, capped at [`CELL_MAX`].
 pub fn diffuse(src: &[u32], dst: &mut [u32], res: [u32; 3], diffusion: f32, decay: f32, b: Boundary) {
-    let res = res.map(|r| r as usize);
-    let [rx, ry, rz] = res;
+    let [rx, ry, rz] = res.map(|r| r as usize);
     let plane = rx * ry;
     let keep = decay * (1.0 - diffusion);
     let spread = decay * diffusion / 27.0;
+    let src_plane = |z: usize| &src[z * plane..(z + 1) * plane];
     // z planes per task: enough tasks to balance, few enough that the two extra planes each
     // task filters stay cheap.
     let per_task = rz.div_ceil(4 * rayon::current_num_threads()).max(4);
@@ -59,21 +68,23 @@ pub fn diffuse(src: &[u32], dst: &mut [u32], res: [u32; 3], diffusion: f32, deca
         .for_each(|(task, out)| {
             let z0 = task * per_task;
             let z1 = (z0 + per_task).min(rz);
-            let mut tmp = vec![0.0f32; plane];
-            let mut ring: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0.0f32; plane]);
+            let mut w = Buffers {
+                row: vec![0.0; rx],
+                xsum: vec![0.0; plane],
+                ring: std::array::from_fn(|_| vec![0.0; plane]),
+            };
             let slot = |z: usize| z % 3;
             let (below, _) = neighbours(z0, rz, b);
-            plane_sum(src, res, below, b, &mut tmp, &mut ring[slot(z0 + 2)]);
-            plane_sum(src, res, z0, b, &mut tmp, &mut ring[slot(z0)]);
-            for z in z0..z1 {
+            plane_sum(src_plane(below), rx, ry, b, &mut w.row, &mut w.xsum, &mut w.ring[slot(z0 + 2)]);
+            plane_sum(src_plane(z0), rx, ry, b, &mut w.row, &mut w.xsum, &mut w.ring[slot(z0)]);
+            for (z, o) in (z0..z1).zip(out.chunks_exact_mut(plane)) {
                 let (_, above) = neighbours(z, rz, b);
-                plane_sum(src, res, above, b, &mut tmp, &mut ring[slot(z + 1)]);
-                let (pa, pb, pc) = (&ring[slot(z + 2)], &ring[slot(z)], &ring[slot(z + 1)]);
-                let s = &src[z * plane..(z + 1) * plane];
-                let o = &mut out[(z - z0) * plane..(z - z0 + 1) * plane];
-                for i in 0..plane {
-                    let v = keep * s[i] as f32 + spread * (pa[i] + pb[i] + pc[i]);
-                    o[i] = (v as u32).min(CELL_MAX);
+                plane_sum(src_plane(above), rx, ry, b, &mut w.row, &mut w.xsum, &mut w.ring[slot(z + 1)]);
+                let (pa, pb, pc) = (&w.ring[slot(z + 2)], &w.ring[slot(z)], &w.ring[slot(z + 1)]);
+                for ((((o, &s), &a), &b), &c) in o.iter_mut().zip(src_plane(z)).zip(pa).zip(pb).zip(pc) {
+                    let v = keep * s as f32 + spread * (a + b + c);
+                    // v >= 0; through i32, which the vector units convert to directly.
+                    *o = v.min(CELL_MAX as f32) as i32 as u32;
                 }
             }
         });

@@ -21,6 +21,7 @@ use crate::sampling::{Stream, basis, uniform_sphere};
 use glam::Vec3;
 pub use params::{Boundary, Params, Spawn};
 use rayon::prelude::*;
+use std::time::Instant;
 
 /// One agent: where it is, where it faces (`forward`, with `up` completing the sensor ring's
 /// frame; right is `forward x up`), and its own random stream.
@@ -37,6 +38,19 @@ impl PartialEq for Agent {
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
         bits(self.pos) == bits(o.pos) && bits(self.forward) == bits(o.forward) && bits(self.up) == bits(o.up)
     }
+}
+
+/// Wall time of one step's phases, in milliseconds.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct StepTimes {
+    /// Re-order the agents along a Morton curve (every few steps).
+    pub sort_ms: f64,
+    /// Sense, turn and move every agent.
+    pub move_ms: f64,
+    /// Add the deposits to the grid.
+    pub deposit_ms: f64,
+    /// Diffuse and decay the grid.
+    pub diffuse_ms: f64,
 }
 
 /// Angles of the three flanking sensors around the forward axis.
@@ -122,8 +136,14 @@ impl Simulation {
         &self.trail
     }
 
-    /// One step: sense, turn, move; deposit; diffuse and decay.
-    pub fn step(&mut self) {
+    /// One step: sense, turn, move; deposit; diffuse and decay. Returns how long each phase
+    /// took.
+    pub fn step(&mut self) -> StepTimes {
+        let t0 = Instant::now();
+        if self.steps % std::env::var("RS").map_or(RESORT_EVERY, |v| v.parse().unwrap()) == 0 {
+            self.sort_agents();
+        }
+        let ts = Instant::now();
         let p = &self.params;
         let rad = |deg: f32| deg.to_radians();
         let steer = Steering {
@@ -145,10 +165,36 @@ impl Simulation {
                 *cell = cell_of(a.pos, res);
             });
         let (diffusion, decay) = (p.diffusion, p.decay);
+        let t1 = Instant::now();
         self.deposit();
+        let t2 = Instant::now();
         diffuse::diffuse(&self.trail, &mut self.scratch, self.res, diffusion, decay, boundary);
         std::mem::swap(&mut self.trail, &mut self.scratch);
         self.steps += 1;
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        let t3 = Instant::now();
+        StepTimes {
+            sort_ms: ms(t0, ts),
+            move_ms: ms(ts, t1),
+            deposit_ms: ms(t1, t2),
+            diffuse_ms: ms(t2, t3),
+        }
+    }
+
+    /// Re-orders the agents along a Morton curve of their voxels, so that agents next to each
+    /// other in memory read nearby voxels (the grid does not fit in cache). The order of the
+    /// agents changes nothing else: each carries its own random stream, and the deposits are
+    /// integer sums. Keys are unique (voxel code, old index), so the order is deterministic.
+    fn sort_agents(&mut self) {
+        let mut keys: Vec<(u64, u32)> = self
+            .agents
+            .par_iter()
+            .enumerate()
+            .map(|(i, a)| (morton(a.pos), i as u32))
+            .collect();
+        keys.par_sort_unstable();
+        self.agents = keys.par_iter().map(|&(_, i)| self.agents[i as usize].clone()).collect();
+        self.cells = self.agents.par_iter().map(|a| cell_of(a.pos, self.res)).collect();
     }
 
     /// Adds every agent's deposit to its voxel: slabs of z planes in parallel, each scanning
@@ -201,6 +247,23 @@ pub fn density_of(trail: &TrailGrid, q: f64) -> DensityGrid {
     Grid::from_data(trail.res(), data, trail.bbox).expect("sizes match")
 }
 
+/// Steps between re-orderings of the agents.
+const RESORT_EVERY: u64 = 8;
+
+/// The Morton code of the voxel holding `pos` (13 bits per axis, enough for [`crate::grid::MAX_RES`]).
+fn morton(pos: Vec3) -> u64 {
+    let spread = |v: f32| {
+        let mut x = (v as u64) & 0x1fff;
+        let mut out = 0u64;
+        for b in 0..13 {
+            out |= ((x & 1) << (3 * b)) as u64;
+            x >>= 1;
+        }
+        out
+    };
+    spread(pos.x) | spread(pos.y) << 1 | spread(pos.z) << 2
+}
+
 /// The storage index of the voxel holding `pos` (which is inside the grid).
 #[inline(always)]
 fn cell_of(pos: Vec3, res: [u32; 3]) -> u32 {
@@ -215,7 +278,11 @@ fn sense(trail: &[u32], res: [u32; 3], p: Vec3, b: Boundary) -> u32 {
         let r = res[a] as i32;
         let i = p[a].floor() as i32;
         match b {
-            Boundary::Wrap => i.rem_euclid(r),
+            // Sensors reach less than a grid side past it in all but tiny grids: one add or
+            // subtract instead of a division.
+            Boundary::Wrap if i < 0 => if i + r >= 0 { i + r } else { i.rem_euclid(r) },
+            Boundary::Wrap if i >= r => if i - r < r { i - r } else { i.rem_euclid(r) },
+            Boundary::Wrap => i,
             Boundary::Walls => i.clamp(0, r - 1),
         }
     };
@@ -289,9 +356,17 @@ fn move_agent(a: &mut Agent, s: &Steering, sd: f32, step: f32, b: Boundary, res:
     for k in 0..3 {
         match b {
             Boundary::Wrap => {
-                a.pos[k] = a.pos[k].rem_euclid(size[k]);
-                if a.pos[k] >= size[k] {
-                    a.pos[k] = 0.0;
+                // A step is shorter than the grid side in all but tiny grids.
+                if a.pos[k] < 0.0 {
+                    a.pos[k] += size[k];
+                } else if a.pos[k] >= size[k] {
+                    a.pos[k] -= size[k];
+                }
+                if !(a.pos[k] >= 0.0 && a.pos[k] < size[k]) {
+                    a.pos[k] = a.pos[k].rem_euclid(size[k]);
+                    if a.pos[k] >= size[k] {
+                        a.pos[k] = 0.0;
+                    }
                 }
             }
             Boundary::Walls => {

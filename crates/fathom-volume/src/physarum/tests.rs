@@ -23,7 +23,7 @@ fn run(threads: usize, p: &Params, res: [u32; 3], steps: u32) -> (Vec<u32>, Vec<
 
 #[test]
 fn same_seed_is_bit_identical_on_1_and_2_threads() {
-    for name in ["tendrils", "sheets", "lattice"] {
+    for name in ["tendrils", "sheets", "lattice", "cage"] {
         let p = Params {
             agents: 20_000,
             ..presets::find(name, [40, 32, 24]).unwrap()
@@ -150,5 +150,5 @@ fn bad_parameters_and_sizes_are_refused() {
     let e = Simulation::new(small(10), [2048; 3], 1, 1 << 30).err().unwrap().to_string();
     assert!(e.contains("memory limit"), "{e}");
     let e = presets::find("tendril", [8; 3]).err().unwrap().to_string();
-    assert!(e.contains("valid presets: tendrils, sheets, lattice"), "{e}");
+    assert!(e.contains("valid presets: tendrils, sheets, lattice, cage"), "{e}");
 }
