@@ -24,6 +24,7 @@ pub mod majorant;
 pub mod medium;
 pub mod phase;
 pub mod physarum;
+pub mod pipeline;
 pub mod raw_file;
 pub mod render;
 pub mod sampling;

@@ -20,6 +20,9 @@ enum BenchKind {
     /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
     /// distance evaluations per pixel.
     Trace(crate::bench_trace::TraceArgs),
+    /// Volume path tracer paths/s on a Menger density (majorant grid vs one global majorant)
+    /// and physarum agent-steps/s with 1M agents on 256^3.
+    Volume(crate::bench_volume::VolumeBenchArgs),
 }
 
 pub fn run(a: BenchArgs) -> Result<(), String> {
@@ -28,5 +31,6 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         BenchKind::Gpu(g) => crate::bench_gpu::run(g),
         BenchKind::Svo(s) => crate::bench_svo::run(s),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
+        BenchKind::Volume(v) => crate::bench_volume::run(v),
     }
 }

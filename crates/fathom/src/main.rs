@@ -11,9 +11,11 @@ mod bench_eval;
 mod bench_gpu;
 mod bench_svo;
 mod bench_trace;
+mod bench_volume;
 mod cmd_list;
 mod cmd_render;
 mod cmd_scene;
+mod cmd_volume;
 mod cmd_zoom;
 mod render_gpu;
 
@@ -45,6 +47,7 @@ enum Command {
     Zoom(cmd_zoom::ZoomArgs),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
+    Volume(Box<cmd_volume::VolumeArgs>),
 }
 
 /// The arguments of a command given no flags, from its clap declarations (every flag has a
@@ -67,6 +70,7 @@ fn main() -> ExitCode {
         Some(Command::Scene(a)) => cmd_scene::run(a),
         Some(Command::Zoom(a)) => cmd_zoom::run(a),
         Some(Command::Bench(a)) => bench::run(a),
+        Some(Command::Volume(a)) => cmd_volume::run(*a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -86,7 +90,7 @@ mod tests {
     fn every_command_help_teaches_by_example() {
         let mut cli = Cli::command();
         cli.build();
-        for name in ["render", "zoom", "list", "scene"] {
+        for name in ["render", "zoom", "list", "scene", "volume"] {
             let sub = cli.find_subcommand_mut(name).unwrap();
             let help = sub.render_long_help().to_string();
             let example = format!("\n  fathom {name} ");

@@ -140,7 +140,7 @@ impl Simulation {
     /// took.
     pub fn step(&mut self) -> StepTimes {
         let t0 = Instant::now();
-        if self.steps % std::env::var("RS").map_or(RESORT_EVERY, |v| v.parse().unwrap()) == 0 {
+        if self.steps % RESORT_EVERY == 0 {
             self.sort_agents();
         }
         let ts = Instant::now();

@@ -1,0 +1,474 @@
+//! `fathom volume`: grow a physarum network, sample a scene, or read a `.vol` grid, and render
+//! it with the volume path tracer (fathom-volume); export grids for Mitsuba 3.
+
+use clap::{Args, ValueEnum};
+use fathom_core::{presets, scene_file};
+use fathom_volume::VolumeError;
+use fathom_volume::integrator::VolumeScene;
+use fathom_volume::light::{Environment, Sun};
+use fathom_volume::medium::{Majorant, Medium, MediumParams};
+use fathom_volume::physarum::{self, Boundary};
+use fathom_volume::pipeline::{self, Placement, Source};
+use fathom_volume::render::{self, Progressive};
+use fathom_volume::WorldBox;
+use glam::{DVec3, Vec3};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+
+/// What grows the density.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum SimKind {
+    /// The 3D slime-mould agent simulation.
+    Physarum,
+}
+
+/// The boundary rule on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum BoundaryArg {
+    Wrap,
+    Walls,
+}
+
+/// Majorant choice on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
+pub enum MajorantArg {
+    /// A coarse grid of per-block maxima walked by a 3D DDA.
+    Grid,
+    /// One majorant for the whole grid.
+    Global,
+}
+
+/// Render a density grid as a cloud with the volume path tracer.
+///
+/// The density comes from a physarum simulation (--sim physarum, the default), a scene's
+/// interior (--scene FILE or --preset NAME: density 1 where the distance is negative), or a
+/// Mitsuba 3 .vol (or fathom .raw) file (--grid FILE). Output .png is tonemapped, .exr is
+/// linear float RGB. --export writes the grid for Mitsuba 3 (.vol) or as trail counts (.raw).
+///
+/// Physarum presets: tendrils, sheets, lattice, cage.
+///
+/// Examples:
+///   fathom volume --sim physarum --preset tendrils --steps 300 --grid 256 -o out.png --spp 64
+///   fathom volume --sim physarum --preset lattice --grid 128 --export lattice.vol
+///   fathom volume --grid cloud.vol --density-scale 30 --albedo 0.9 --g 0.6 --env 1 --eye 2,1.5,2.5 --target 0.5,0.5,0.5 --fov 35 --size 512x512 --spp 128 -o cloud.exr
+///   fathom volume --preset menger --grid 128 --density-scale 20 -o sponge.png --stats sponge.json
+///   fathom volume --scene my.ron --grid 192 --smooth 1.5 --sun 0.4,1,0.3 --sky-top 0.3,0.45,0.8 --sky-bottom 0.1,0.1,0.1 -o my.png
+///   fathom volume --sim physarum --preset cage --emission 4 --env 0 -o glow.png   (emissive)
+///   fathom volume --preset menger --eye 0.1,0.2,0.3 --target 1,0,0 -o inside.png   (camera inside)
+#[derive(Args, Debug)]
+#[command(verbatim_doc_comment)]
+pub struct VolumeArgs {
+    /// Grow the density with this simulation (the default when no scene or file is given).
+    #[arg(long, value_enum)]
+    pub sim: Option<SimKind>,
+    /// With --sim: a physarum preset; otherwise: a scene preset (see `fathom list presets`).
+    #[arg(long)]
+    pub preset: Option<String>,
+    /// A scene file whose interior becomes the density.
+    #[arg(long, conflicts_with = "sim")]
+    pub scene: Option<PathBuf>,
+    /// A .vol or .raw file to render; or, with --sim, --scene or --preset, the grid
+    /// resolution N (N^3 voxels; default 256 for the simulation, 128 for scenes).
+    #[arg(long)]
+    pub grid: Option<String>,
+    /// Simulation steps.
+    #[arg(long, default_value_t = 300)]
+    pub steps: u32,
+    /// Random seed (simulation and rendering).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Agents (default: the preset's, scaled to the grid).
+    #[arg(long)]
+    pub agents: Option<u32>,
+    /// Angle between the forward and flanking sensors, degrees [0, 180].
+    #[arg(long)]
+    pub sensor_angle: Option<f32>,
+    /// Sensor distance in voxels [0, 256].
+    #[arg(long)]
+    pub sensor_distance: Option<f32>,
+    /// Turn per step toward the strongest sensor, degrees [0, 180].
+    #[arg(long)]
+    pub turn_angle: Option<f32>,
+    /// Move per step in voxels (0, 32].
+    #[arg(long)]
+    pub step_size: Option<f32>,
+    /// Trail count deposited per agent per step, 1..=65535.
+    #[arg(long)]
+    pub deposit: Option<u32>,
+    /// Fraction of the trail kept per step [0, 1].
+    #[arg(long)]
+    pub decay: Option<f32>,
+    /// Mix toward the 3x3x3 mean per step [0, 1].
+    #[arg(long)]
+    pub diffusion: Option<f32>,
+    /// Largest random roll about the forward axis per step, degrees [0, 180].
+    #[arg(long)]
+    pub roll: Option<f32>,
+    /// Grid faces: agents wrap around or reflect.
+    #[arg(long, value_enum)]
+    pub boundary: Option<BoundaryArg>,
+    /// Where the grid sits: for files `unit` (Mitsuba's default), `file` (the .vol header's
+    /// box) or x0,y0,z0,x1,y1,z1; for scenes the sampled box (default: fitted).
+    #[arg(long = "box", allow_hyphen_values = true)]
+    pub bbox: Option<String>,
+    /// Scenes: smooth the density over this many voxels across the surface [0, 64].
+    #[arg(long, default_value_t = 0.0)]
+    pub smooth: f32,
+    /// Extinction per unit density and length [0, 1e6].
+    #[arg(long, default_value_t = 20.0)]
+    pub density_scale: f32,
+    /// Single-scattering albedo: A or r,g,b in [0, 1].
+    #[arg(long, default_value = "0.8")]
+    pub albedo: String,
+    /// Henyey-Greenstein asymmetry (-1, 1): 0 isotropic, > 0 forward.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub g: f32,
+    /// Constant environment radiance: R or r,g,b.
+    #[arg(long, default_value = "1")]
+    pub env: String,
+    /// Sky gradient instead of --env: radiance straight up, r,g,b (with --sky-bottom).
+    #[arg(long, requires = "sky_bottom")]
+    pub sky_top: Option<String>,
+    /// Sky gradient: radiance straight down, r,g,b.
+    #[arg(long, requires = "sky_top")]
+    pub sky_bottom: Option<String>,
+    /// A directional light from this direction x,y,z.
+    #[arg(long, allow_hyphen_values = true)]
+    pub sun: Option<String>,
+    /// Sun radiance (as irradiance): R or r,g,b.
+    #[arg(long, default_value = "3")]
+    pub sun_radiance: String,
+    /// Emission strength of the colour map on density (0: none) [0, 1e6].
+    #[arg(long, default_value_t = 0.0)]
+    pub emission: f32,
+    /// Majorants for delta and ratio tracking.
+    #[arg(long, value_enum, default_value = "grid")]
+    pub majorant: MajorantArg,
+    /// Voxels per majorant-grid cell along each axis, 1..=1024.
+    #[arg(long, default_value_t = 8)]
+    pub majorant_block: u32,
+    /// Do not skip lookups in homogeneous majorant cells (and use plain ratio tracking).
+    #[arg(long)]
+    pub no_homogeneous: bool,
+    /// Most scattering events per path, 0..=100000.
+    #[arg(long, default_value_t = 1000)]
+    pub max_depth: u32,
+    /// Russian roulette after this many scattering events.
+    #[arg(long, default_value_t = 5)]
+    pub rr_depth: u32,
+    /// Camera position x,y,z (default: the scene's camera, or framing the grid).
+    #[arg(long, allow_hyphen_values = true)]
+    pub eye: Option<String>,
+    /// Point the camera looks at x,y,z.
+    #[arg(long, allow_hyphen_values = true)]
+    pub target: Option<String>,
+    /// Camera up vector x,y,z.
+    #[arg(long, allow_hyphen_values = true)]
+    pub up: Option<String>,
+    /// Vertical field of view in degrees, (0, 179].
+    #[arg(long)]
+    pub fov: Option<f64>,
+    /// Image size WIDTHxHEIGHT.
+    #[arg(long, default_value = "512x512")]
+    pub size: String,
+    /// Samples per pixel, 1..=1048576.
+    #[arg(long, default_value_t = 64)]
+    pub spp: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output image: .png (tonemapped) or .exr (linear float RGB). Default volume.png, or
+    /// none when only exporting.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Write the density grid: .vol (Mitsuba 3) or .raw (fathom; trail counts when simulated).
+    #[arg(long)]
+    pub export: Option<PathBuf>,
+    /// Write render (and simulation) statistics as JSON.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Memory limit for grids and agents, e.g. 4G.
+    #[arg(long, default_value = "4G")]
+    pub max_memory: String,
+    /// No progress bars.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Parses `n` comma-separated finite numbers (or one, repeated, when `broadcast`).
+fn floats<const N: usize>(name: &str, s: &str, broadcast: bool) -> Result<[f32; N], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let bad = || {
+        let one = if broadcast { " (or one number for all)" } else { "" };
+        format!("--{name} `{s}` must be {N} comma-separated numbers{one}")
+    };
+    let v: Vec<f32> = parts
+        .iter()
+        .map(|p| p.parse::<f32>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(bad)?;
+    match v.len() {
+        1 if broadcast => Ok([v[0]; N]),
+        n if n == N => Ok(std::array::from_fn(|i| v[i])),
+        _ => Err(bad()),
+    }
+}
+
+fn vec3(name: &str, s: &str) -> Result<Vec3, String> {
+    Ok(Vec3::from_array(floats::<3>(name, s, false)?))
+}
+
+fn colour(name: &str, s: &str) -> Result<Vec3, String> {
+    Ok(Vec3::from_array(floats::<3>(name, s, true)?))
+}
+
+fn parse_box(s: &str) -> Result<WorldBox, String> {
+    let b = floats::<6>("box", s, false)?;
+    WorldBox::new(Vec3::new(b[0], b[1], b[2]), Vec3::new(b[3], b[4], b[5])).map_err(|e| e.to_string())
+}
+
+fn grid_res(a: &VolumeArgs, default: u32) -> Result<u32, String> {
+    match &a.grid {
+        None => Ok(default),
+        Some(g) => g.parse::<u32>().map_err(|_| {
+            format!("--grid `{g}`: with --sim, --scene or --preset, --grid is the resolution N (N^3 voxels); to render a file, give --grid FILE.vol alone")
+        }),
+    }
+}
+
+/// The density source the arguments describe.
+fn source(a: &VolumeArgs) -> Result<Source, String> {
+    let file_given = a.grid.as_ref().is_some_and(|g| g.parse::<u32>().is_err());
+    if a.sim.is_some() || (a.scene.is_none() && a.preset.is_none() && !file_given) {
+        let res = grid_res(a, 256)?;
+        let name = a.preset.as_deref().unwrap_or("tendrils");
+        let mut p = physarum::presets::find(name, [res; 3]).map_err(|e| e.to_string())?;
+        let set = |v: Option<f32>, f: &mut f32| {
+            if let Some(v) = v {
+                *f = v;
+            }
+        };
+        if let Some(n) = a.agents {
+            p.agents = n;
+        }
+        set(a.sensor_angle, &mut p.sensor_angle);
+        set(a.sensor_distance, &mut p.sensor_distance);
+        set(a.turn_angle, &mut p.turn_angle);
+        set(a.step_size, &mut p.step_size);
+        set(a.decay, &mut p.decay);
+        set(a.diffusion, &mut p.diffusion);
+        set(a.roll, &mut p.roll);
+        if let Some(d) = a.deposit {
+            p.deposit = d;
+        }
+        if let Some(b) = a.boundary {
+            p.boundary = match b {
+                BoundaryArg::Wrap => Boundary::Wrap,
+                BoundaryArg::Walls => Boundary::Walls,
+            };
+        }
+        if a.bbox.is_some() {
+            return Err("--box places scenes and files; a simulated grid spans [-1, 1] along its longest side".into());
+        }
+        return Ok(Source::Physarum {
+            params: p,
+            res,
+            steps: a.steps,
+            seed: a.seed,
+        });
+    }
+    if a.scene.is_some() || a.preset.is_some() {
+        let scene = match (&a.scene, &a.preset) {
+            (Some(path), _) => scene_file::load(path).map_err(|e| e.to_string())?,
+            (None, Some(name)) => presets::load(name)?,
+            _ => unreachable!(),
+        };
+        let bbox = a.bbox.as_deref().map(parse_box).transpose()?;
+        return Ok(Source::Fractal {
+            scene: Box::new(scene),
+            res: grid_res(a, 128)?,
+            bbox,
+            smooth: a.smooth,
+        });
+    }
+    let path = PathBuf::from(a.grid.as_ref().expect("file_given"));
+    let placement = match a.bbox.as_deref() {
+        None | Some("unit") => Placement::Default,
+        Some("file") => Placement::FromFile,
+        Some(s) => Placement::Box(parse_box(s)?),
+    };
+    Ok(Source::File { path, placement })
+}
+
+fn medium_params(a: &VolumeArgs) -> Result<MediumParams, String> {
+    Ok(MediumParams {
+        density_scale: a.density_scale,
+        albedo: colour("albedo", &a.albedo)?,
+        g: a.g,
+        emission: a.emission,
+        majorant: match a.majorant {
+            MajorantArg::Global => Majorant::Global,
+            MajorantArg::Grid => Majorant::Grid {
+                block: a.majorant_block,
+            },
+        },
+        homogeneous_cells: !a.no_homogeneous,
+    })
+}
+
+fn lighting(a: &VolumeArgs) -> Result<(Environment, Option<Sun>), String> {
+    let env = match (&a.sky_top, &a.sky_bottom) {
+        (Some(t), Some(b)) => Environment::Sky {
+            top: colour("sky-top", t)?,
+            bottom: colour("sky-bottom", b)?,
+            up: Vec3::Y,
+        },
+        _ => Environment::Constant(colour("env", &a.env)?),
+    };
+    let sun = match &a.sun {
+        None => None,
+        Some(s) => {
+            let d = vec3("sun", s)?;
+            if d.length() == 0.0 {
+                return Err("--sun 0,0,0: give the direction toward the sun".into());
+            }
+            Some(Sun {
+                towards: d.normalize(),
+                radiance: colour("sun-radiance", &a.sun_radiance)?,
+            })
+        }
+    };
+    Ok((env, sun))
+}
+
+fn bar(quiet: bool, len: u64, what: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(len);
+    pb.set_style(
+        ProgressStyle::with_template("{msg:>9} [{bar:40}] {pos}/{len} ({eta})")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
+    pb.set_message(what.to_string());
+    pb
+}
+
+pub fn run(a: VolumeArgs) -> Result<(), String> {
+    let (width, height) = crate::cmd_zoom::parse_size(&a.size)?;
+    render::check_spp(a.spp).map_err(|e| e.to_string())?;
+    let limit = crate::cmd_zoom::parse_bytes(&a.max_memory)? as u64;
+    let src = source(&a)?;
+    let params = medium_params(&a)?;
+    params.validate().map_err(|e| e.to_string())?;
+    let (environment, sun) = lighting(&a)?;
+    let output = match (&a.output, &a.export) {
+        (Some(o), _) => Some(o.clone()),
+        (None, None) => Some(PathBuf::from("volume.png")),
+        (None, Some(_)) => None,
+    };
+    // Fail on unwritable outputs before the long work.
+    for p in output.iter().chain(&a.export).chain(&a.stats) {
+        std::fs::File::create(p).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| e.to_string())?;
+    pool.install(|| run_in_pool(&a, src, params, environment, sun, output, (width, height), limit))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_in_pool(
+    a: &VolumeArgs,
+    src: Source,
+    params: MediumParams,
+    environment: Environment,
+    sun: Option<Sun>,
+    output: Option<PathBuf>,
+    (width, height): (u32, u32),
+    limit: u64,
+) -> Result<(), String> {
+    let pb = std::sync::Mutex::new(None::<ProgressBar>);
+    let built = pipeline::build(&src, limit, &|what, done, total| {
+        let mut g = pb.lock().expect("progress lock");
+        let b = g.get_or_insert_with(|| bar(a.quiet, total, what));
+        b.set_position(done);
+    })
+    .map_err(|e: VolumeError| e.to_string())?;
+    if let Some(b) = pb.lock().expect("progress lock").take() {
+        b.finish();
+    }
+    if let Some(p) = &a.export {
+        pipeline::export(p, &built).map_err(|e| e.to_string())?;
+        if !a.quiet {
+            let r = built.density.res();
+            eprintln!("volume: wrote {}x{}x{} grid to {}", r[0], r[1], r[2], p.display());
+        }
+    }
+    let mut stats = serde_json::Map::new();
+    if let Some(s) = &built.sim {
+        stats.insert("simulation".into(), serde_json::to_value(s).map_err(|e| e.to_string())?);
+    }
+    if let Some(out) = &output {
+        let mut camera = built.camera.clone();
+        let dv = |name: &str, s: &Option<String>| -> Result<Option<DVec3>, String> {
+            s.as_deref().map(|s| vec3(name, s).map(|v| v.as_dvec3())).transpose()
+        };
+        if let Some(v) = dv("eye", &a.eye)? {
+            camera.eye = v;
+        }
+        if let Some(v) = dv("target", &a.target)? {
+            camera.target = v;
+        }
+        if let Some(v) = dv("up", &a.up)? {
+            camera.up = v;
+        }
+        if let Some(f) = a.fov {
+            camera.fov = f;
+        }
+        let scene = VolumeScene {
+            medium: Medium::new(built.density, &params).map_err(|e| e.to_string())?,
+            environment,
+            sun,
+            max_depth: a.max_depth,
+            rr_depth: a.rr_depth,
+        };
+        let mut prog = Progressive::new(&scene, &camera, width, height, a.seed).map_err(|e| e.to_string())?;
+        let pb = bar(a.quiet, a.spp as u64 * height as u64, "render");
+        // Passes of a few samples: the same image as one pass (each sample has its own stream).
+        let pass = (a.spp / 8).max(1);
+        while prog.samples() < a.spp {
+            let n = pass.min(a.spp - prog.samples());
+            prog.add_samples(n, &|| pb.inc(n as u64)).map_err(|e| e.to_string())?;
+        }
+        pb.finish();
+        let frame = prog.frame();
+        if out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+            pipeline::save_exr(&frame, out).map_err(|e| e.to_string())?;
+        } else {
+            let f = fathom_trace::output::open_output(out)?;
+            fathom_trace::output::save_colour(&frame, f, out)?;
+        }
+        let st = prog.stats();
+        if !a.quiet {
+            eprintln!(
+                "volume: {} ({}x{}, {} spp): {:.2} M paths/s, {:.2} scatterings per path, {:.1} majorant steps per path",
+                out.display(),
+                width,
+                height,
+                a.spp,
+                st.paths_per_second / 1e6,
+                st.mean_path_length,
+                st.majorant_steps_per_path
+            );
+        }
+        stats.insert("render".into(), serde_json::to_value(st).map_err(|e| e.to_string())?);
+    }
+    if let Some(p) = &a.stats {
+        let text = serde_json::to_string_pretty(&serde_json::Value::Object(stats)).map_err(|e| e.to_string())?;
+        std::fs::write(p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    }
+    Ok(())
+}
