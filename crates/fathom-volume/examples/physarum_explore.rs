@@ -38,9 +38,18 @@ fn main() {
         tt[2] += t.diffuse_ms;
         tt[3] += t.sort_ms;
     }
-    println!("sort {:.1} move {:.1} deposit {:.1} diffuse {:.1} ms/step", tt[3] / steps as f64, tt[0] / steps as f64, tt[1] / steps as f64, tt[2] / steps as f64);
+    println!(
+        "sort {:.1} move {:.1} deposit {:.1} diffuse {:.1} ms/step",
+        tt[3] / steps as f64,
+        tt[0] / steps as f64,
+        tt[1] / steps as f64,
+        tt[2] / steps as f64
+    );
     let ms = t.elapsed().as_secs_f64() * 1e3 / steps as f64;
-    println!("{name}: {ms:.1} ms/step, {:.0} agent-steps/s", s.params().agents as f64 / ms * 1e3);
+    println!(
+        "{name}: {ms:.1} ms/step, {:.0} agent-steps/s",
+        s.params().agents as f64 / ms * 1e3
+    );
     let d = s.density();
     let n = n as usize;
     let mut mip = vec![0f32; n * n];
@@ -57,7 +66,17 @@ fn main() {
         }
     }
     for (img, suffix) in [(mip, "mip"), (slice, "slice")] {
-        let px: Vec<u8> = img.iter().map(|v| (v.min(1.0).sqrt() * 255.0) as u8).collect();
-        image::save_buffer(format!("{out}-{name}-{suffix}.png"), &px, n as u32, n as u32, image::ColorType::L8).unwrap();
+        let px: Vec<u8> = img
+            .iter()
+            .map(|v| (v.min(1.0).sqrt() * 255.0) as u8)
+            .collect();
+        image::save_buffer(
+            format!("{out}-{name}-{suffix}.png"),
+            &px,
+            n as u32,
+            n as u32,
+            image::ColorType::L8,
+        )
+        .unwrap();
     }
 }

@@ -57,7 +57,11 @@ pub enum VolumeError {
 
 impl VolumeError {
     /// A parameter error: `name = value` is outside `range`.
-    pub fn param(name: &'static str, value: impl std::fmt::Display, range: impl Into<String>) -> Self {
+    pub fn param(
+        name: &'static str,
+        value: impl std::fmt::Display,
+        range: impl Into<String>,
+    ) -> Self {
         VolumeError::Param {
             name,
             value: value.to_string(),

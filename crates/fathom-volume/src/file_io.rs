@@ -41,7 +41,8 @@ pub fn read_checked(
     check_length(path, len, total)?;
     let mut bytes = header;
     bytes.resize(total as usize, 0);
-    f.read_exact(&mut bytes[header_len..]).map_err(io_err(path))?;
+    f.read_exact(&mut bytes[header_len..])
+        .map_err(io_err(path))?;
     Ok(bytes)
 }
 

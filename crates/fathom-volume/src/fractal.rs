@@ -18,10 +18,21 @@ pub const FIT_HALF: f32 = 4.0;
 pub const MAX_SMOOTH: f64 = 64.0;
 
 /// Distances at the centres of a row of `n` voxels starting at `p0`, `dx` apart along x.
-fn row_distances(ev: &mut Evaluator<F32x8>, tape: &Tape, p0: Vec3, dx: f32, n: usize, out: &mut [f32]) {
+fn row_distances(
+    ev: &mut Evaluator<F32x8>,
+    tape: &Tape,
+    p0: Vec3,
+    dx: f32,
+    n: usize,
+    out: &mut [f32],
+) {
     for (k, chunk) in out[..n].chunks_mut(8).enumerate() {
         let xs: [f64; 8] = std::array::from_fn(|l| (p0.x + dx * (k * 8 + l) as f32) as f64);
-        let p = V3::new(F32x8::from_lanes(&xs), <F32x8 as Real>::splat(p0.y as f64), <F32x8 as Real>::splat(p0.z as f64));
+        let p = V3::new(
+            F32x8::from_lanes(&xs),
+            <F32x8 as Real>::splat(p0.y as f64),
+            <F32x8 as Real>::splat(p0.z as f64),
+        );
         let d = ev.distance(tape, p);
         for (l, v) in chunk.iter_mut().enumerate() {
             *v = d.lane(l) as f32;
@@ -127,27 +138,44 @@ mod tests {
         for smooth in [0.0, 2.0] {
             let g = sample(&sphere(), [40, 40, 40], bbox, smooth, 1 << 30, &|| {}).unwrap();
             let mean = g.data().iter().map(|&v| v as f64).sum::<f64>() / g.data().len() as f64;
-            assert!((mean - want).abs() < 0.01 * want + 2e-3, "smooth {smooth}: filled {mean}, want {want}");
+            assert!(
+                (mean - want).abs() < 0.01 * want + 2e-3,
+                "smooth {smooth}: filled {mean}, want {want}"
+            );
             assert_eq!(g.nearest(Vec3::ZERO), 1.0);
             assert_eq!(g.nearest(Vec3::splat(1.4)), 0.0);
             let partial = g.data().iter().filter(|v| **v > 0.0 && **v < 1.0).count();
-            assert_eq!(partial > 0, smooth > 0.0, "smoothing makes a ramp, binary does not");
+            assert_eq!(
+                partial > 0,
+                smooth > 0.0,
+                "smoothing makes a ramp, binary does not"
+            );
         }
     }
 
     #[test]
     fn fit_box_encloses_the_object_tightly() {
         let b = fit_box(&sphere()).unwrap();
-        assert!(b.min.max_element() < -1.0 && b.min.min_element() > -1.4, "{b:?}");
-        assert!(b.max.min_element() > 1.0 && b.max.max_element() < 1.4, "{b:?}");
+        assert!(
+            b.min.max_element() < -1.0 && b.min.min_element() > -1.4,
+            "{b:?}"
+        );
+        assert!(
+            b.max.min_element() > 1.0 && b.max.max_element() < 1.4,
+            "{b:?}"
+        );
         let far = fathom_core::scene_file::parse(
             "Scene(version: 1, root: Node(shape: Sphere(radius: 0.5), ops: [Translate(offset: (40.0, 0.0, 0.0))]))",
             "far",
         )
         .unwrap();
-        let e = fit_box(&Tape::compile(&far).unwrap()).unwrap_err().to_string();
+        let e = fit_box(&Tape::compile(&far).unwrap())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("no surface inside"), "{e}");
-        let e = sample(&sphere(), [4, 4, 4], b, -1.0, 1 << 20, &|| {}).unwrap_err().to_string();
+        let e = sample(&sphere(), [4, 4, 4], b, -1.0, 1 << 20, &|| {})
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("smooth = -1"), "{e}");
     }
 }

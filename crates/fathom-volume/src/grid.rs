@@ -196,7 +196,8 @@ impl<T: Copy + Default> Grid<T> {
     /// The voxel containing local point `l` (clamped to the grid).
     #[inline]
     pub fn nearest_local(&self, l: Vec3) -> T {
-        let c = |a: usize| ((l[a] * self.res[a] as f32) as i64).clamp(0, self.res[a] as i64 - 1) as u32;
+        let c =
+            |a: usize| ((l[a] * self.res[a] as f32) as i64).clamp(0, self.res[a] as i64 - 1) as u32;
         self.get(c(0), c(1), c(2))
     }
 
@@ -218,7 +219,11 @@ impl<T: Copy + Default> Grid<T> {
     /// The (x, y, z) of storage index `i`.
     pub fn coords(&self, i: usize) -> [u32; 3] {
         let (rx, ry) = (self.res[0] as usize, self.res[1] as usize);
-        [(i % rx) as u32, (i / rx % ry) as u32, (i / (rx * ry)) as u32]
+        [
+            (i % rx) as u32,
+            (i / rx % ry) as u32,
+            (i / (rx * ry)) as u32,
+        ]
     }
 }
 

@@ -33,22 +33,40 @@ impl VolumeScene {
     /// Checks the path-length controls and the lights.
     pub fn validate(&self) -> Result<(), VolumeError> {
         if self.max_depth > MAX_DEPTH {
-            return Err(VolumeError::param("max depth", self.max_depth, format!("0..={MAX_DEPTH}")));
+            return Err(VolumeError::param(
+                "max depth",
+                self.max_depth,
+                format!("0..={MAX_DEPTH}"),
+            ));
         }
         if self.rr_depth > MAX_DEPTH {
-            return Err(VolumeError::param("rr depth", self.rr_depth, format!("0..={MAX_DEPTH}")));
+            return Err(VolumeError::param(
+                "rr depth",
+                self.rr_depth,
+                format!("0..={MAX_DEPTH}"),
+            ));
         }
         let ok = |v: Vec3| v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1e6;
         let env_ok = match self.environment {
             Environment::Constant(c) => ok(c),
-            Environment::Sky { top, bottom, up } => ok(top) && ok(bottom) && (up.length() - 1.0).abs() < 1e-3,
+            Environment::Sky { top, bottom, up } => {
+                ok(top) && ok(bottom) && (up.length() - 1.0).abs() < 1e-3
+            }
         };
         if !env_ok {
-            return Err(VolumeError::param("environment", format!("{:?}", self.environment), "radiances in [0, 1e6] per channel"));
+            return Err(VolumeError::param(
+                "environment",
+                format!("{:?}", self.environment),
+                "radiances in [0, 1e6] per channel",
+            ));
         }
         if let Some(s) = self.sun {
             if !ok(s.radiance) || !((s.towards.length() - 1.0).abs() < 1e-3) {
-                return Err(VolumeError::param("sun", format!("{s:?}"), "a unit direction and radiance in [0, 1e6] per channel"));
+                return Err(VolumeError::param(
+                    "sun",
+                    format!("{s:?}"),
+                    "a unit direction and radiance in [0, 1e6] per channel",
+                ));
             }
         }
         Ok(())
@@ -82,7 +100,13 @@ fn power(a: f32, b: f32) -> f32 {
 
 impl VolumeScene {
     /// The radiance arriving at `o` from direction `-d` (the camera ray `o + t d`, `d` unit).
-    pub fn radiance(&self, mut o: Vec3, mut d: Vec3, rng: &mut Stream, c: &mut PathCounters) -> Vec3 {
+    pub fn radiance(
+        &self,
+        mut o: Vec3,
+        mut d: Vec3,
+        rng: &mut Stream,
+        c: &mut PathCounters,
+    ) -> Vec3 {
         c.paths += 1;
         let m = &self.medium;
         let bbox = m.bbox();
@@ -126,7 +150,14 @@ impl VolumeScene {
             }
             if let Some(sun) = &self.sun {
                 let fp = m.phase.eval(d.dot(sun.towards));
-                let tr = m.transmittance(x, sun.towards, 0.0, m.exit(x, sun.towards), rng, &mut c.track);
+                let tr = m.transmittance(
+                    x,
+                    sun.towards,
+                    0.0,
+                    m.exit(x, sun.towards),
+                    rng,
+                    &mut c.track,
+                );
                 l += beta * sun.radiance * (fp * tr);
             }
             if last {

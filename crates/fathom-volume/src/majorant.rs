@@ -117,7 +117,8 @@ impl MajorantGrid {
 
     /// The world box of cell `c`.
     pub fn cell_box(&self, c: [u32; 3]) -> WorldBox {
-        let size = self.bbox.extent() / Vec3::new(self.res[0] as f32, self.res[1] as f32, self.res[2] as f32);
+        let size = self.bbox.extent()
+            / Vec3::new(self.res[0] as f32, self.res[1] as f32, self.res[2] as f32);
         let lo = self.bbox.min + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * size;
         WorldBox {
             min: lo,
@@ -215,13 +216,22 @@ mod tests {
     fn noise_grid(res: [u32; 3], bbox: WorldBox) -> DensityGrid {
         let mut r = Stream::new(5, 0, 0);
         let n = (res[0] * res[1] * res[2]) as usize;
-        let data = (0..n).map(|_| if r.f32() < 0.4 { 0.0 } else { r.f32() * 3.0 }).collect();
+        let data = (0..n)
+            .map(|_| if r.f32() < 0.4 { 0.0 } else { r.f32() * 3.0 })
+            .collect();
         Grid::from_data(res, data, bbox).unwrap()
     }
 
     /// The exact set of cells a ray overlaps by more than `eps` of its length, by testing the
     /// ray against every cell's box, sorted by entry.
-    fn brute_force(m: &MajorantGrid, o: Vec3, d: Vec3, t0: f32, t1: f32, eps: f32) -> Vec<[u32; 3]> {
+    fn brute_force(
+        m: &MajorantGrid,
+        o: Vec3,
+        d: Vec3,
+        t0: f32,
+        t1: f32,
+        eps: f32,
+    ) -> Vec<[u32; 3]> {
         let r = m.res();
         let mut hits = Vec::new();
         for z in 0..r[2] {
@@ -252,12 +262,22 @@ mod tests {
         let mut r = Stream::new(9, 1, 0);
         let mut rays = 0;
         for i in 0..3000 {
-            let o = bbox.centre() + (Vec3::new(r.f32(), r.f32(), r.f32()) - 0.5) * bbox.extent() * if i % 2 == 0 { 3.0 } else { 0.9 };
+            let o = bbox.centre()
+                + (Vec3::new(r.f32(), r.f32(), r.f32()) - 0.5)
+                    * bbox.extent()
+                    * if i % 2 == 0 { 3.0 } else { 0.9 };
             let mut d = uniform_sphere(r.f32(), r.f32());
             if i % 7 == 0 {
-                d = [Vec3::X, -Vec3::Y, Vec3::Z, Vec3::new(1.0, 1.0, 0.0).normalize()][i % 4];
+                d = [
+                    Vec3::X,
+                    -Vec3::Y,
+                    Vec3::Z,
+                    Vec3::new(1.0, 1.0, 0.0).normalize(),
+                ][i % 4];
             }
-            let Some((t0, t1)) = bbox.intersect(o, d) else { continue };
+            let Some((t0, t1)) = bbox.intersect(o, d) else {
+                continue;
+            };
             rays += 1;
             let eps = 1e-4;
             let segs: Vec<Segment> = m.dda(o, d, t0, t1).collect();
@@ -267,15 +287,26 @@ mod tests {
             for w in segs.windows(2) {
                 assert_eq!(w[0].t1, w[1].t0);
             }
-            let dda: Vec<[u32; 3]> = segs.iter().filter(|s| s.t1 - s.t0 > eps).map(|s| s.cell).collect();
+            let dda: Vec<[u32; 3]> = segs
+                .iter()
+                .filter(|s| s.t1 - s.t0 > eps)
+                .map(|s| s.cell)
+                .collect();
             let want = brute_force(&m, o, d, t0, t1, eps);
             assert_eq!(dda, want, "ray {o} {d}");
             // Cells of near-zero segments (corner grazes) still touch the ray.
             for s in &segs {
                 let b = m.cell_box(s.cell);
                 let p = o + d * (0.5 * (s.t0 + s.t1));
-                let grown = WorldBox { min: b.min - 1e-4, max: b.max + 1e-4 };
-                assert!(grown.contains(p), "segment midpoint {p} outside cell {:?}", s.cell);
+                let grown = WorldBox {
+                    min: b.min - 1e-4,
+                    max: b.max + 1e-4,
+                };
+                assert!(
+                    grown.contains(p),
+                    "segment midpoint {p} outside cell {:?}",
+                    s.cell
+                );
             }
         }
         assert!(rays > 1500);
@@ -294,7 +325,10 @@ mod tests {
             let c = [c.x as u32, c.y as u32, c.z as u32];
             let v = 2.0 * g.trilinear(p);
             let b = m.bounds(c);
-            assert!(v <= b.max * (1.0 + 1e-6) && v >= b.min * (1.0 - 1e-6), "{v} outside {b:?}");
+            assert!(
+                v <= b.max * (1.0 + 1e-6) && v >= b.min * (1.0 - 1e-6),
+                "{v} outside {b:?}"
+            );
         }
         let gl = MajorantGrid::global(&g, 2.0);
         assert_eq!(gl.bounds([0, 0, 0]).max, 2.0 * g.max_value());

@@ -70,7 +70,12 @@ pub const MAX_BLOCK: u32 = 1024;
 impl MediumParams {
     /// Checks every parameter's range.
     pub fn validate(&self) -> Result<(), VolumeError> {
-        check_range("density scale", self.density_scale as f64, 0.0, MAX_DENSITY_SCALE)?;
+        check_range(
+            "density scale",
+            self.density_scale as f64,
+            0.0,
+            MAX_DENSITY_SCALE,
+        )?;
         for a in self.albedo.to_array() {
             check_range("albedo", a as f64, 0.0, 1.0)?;
         }
@@ -78,7 +83,11 @@ impl MediumParams {
         check_range("emission", self.emission as f64, 0.0, MAX_EMISSION)?;
         if let Majorant::Grid { block } = self.majorant {
             if !(1..=MAX_BLOCK).contains(&block) {
-                return Err(VolumeError::param("majorant block", block, format!("1..={MAX_BLOCK} voxels")));
+                return Err(VolumeError::param(
+                    "majorant block",
+                    block,
+                    format!("1..={MAX_BLOCK} voxels"),
+                ));
             }
         }
         Ok(())
@@ -139,9 +148,12 @@ impl Medium {
         let res = density.res();
         let majorant = match p.majorant {
             Majorant::Global => MajorantGrid::global(&density, p.density_scale),
-            Majorant::Grid { block } => MajorantGrid::build(&density, res.map(|r| r.div_ceil(block)), p.density_scale),
+            Majorant::Grid { block } => {
+                MajorantGrid::build(&density, res.map(|r| r.div_ceil(block)), p.density_scale)
+            }
         };
-        let q_scale = Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32) / density.bbox.extent();
+        let q_scale =
+            Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32) / density.bbox.extent();
         let q_offset = -density.bbox.min * q_scale - Vec3::splat(0.5);
         let max = density.max_value();
         Ok(Medium {
@@ -168,7 +180,9 @@ impl Medium {
     /// Extinction at world point `p`.
     #[inline(always)]
     pub fn sigma_t(&self, p: Vec3) -> f32 {
-        self.density.trilinear_voxel(p * self.q_scale + self.q_offset) * self.scale
+        self.density
+            .trilinear_voxel(p * self.q_scale + self.q_offset)
+            * self.scale
     }
 
     /// Delta tracking along `o + t d` for t in `[t0, t1]` (inside the box): the first real
@@ -249,7 +263,11 @@ impl Medium {
             if maj <= 0.0 {
                 continue;
             }
-            let control = if self.homogeneous { seg.bounds.min } else { 0.0 };
+            let control = if self.homogeneous {
+                seg.bounds.min
+            } else {
+                0.0
+            };
             let resid = maj - control;
             if control > 0.0 {
                 tr *= (-control * (seg.t1 - seg.t0)).exp();

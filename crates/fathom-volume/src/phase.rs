@@ -74,7 +74,10 @@ mod tests {
     fn bin_probabilities(hg: &HenyeyGreenstein, bins: usize) -> Vec<f64> {
         (0..bins)
             .map(|b| {
-                let (lo, hi) = (-1.0 + 2.0 * b as f64 / bins as f64, -1.0 + 2.0 * (b + 1) as f64 / bins as f64);
+                let (lo, hi) = (
+                    -1.0 + 2.0 * b as f64 / bins as f64,
+                    -1.0 + 2.0 * (b + 1) as f64 / bins as f64,
+                );
                 let n = 2000;
                 (0..n)
                     .map(|i| {
@@ -96,7 +99,10 @@ mod tests {
             let hg = HenyeyGreenstein::new(g).unwrap();
             let p = bin_probabilities(&hg, bins);
             let total: f64 = p.iter().sum();
-            assert!((total - 1.0).abs() < 1e-3, "g = {g}: pdf integrates to {total}");
+            assert!(
+                (total - 1.0).abs() < 1e-3,
+                "g = {g}: pdf integrates to {total}"
+            );
             let n = 200_000;
             let mut counts = vec![0u64; bins];
             let mut az = vec![0u64; 16];
@@ -106,7 +112,10 @@ mod tests {
             for _ in 0..n {
                 let (w, pdf) = hg.sample(d, rng.f32(), rng.f32());
                 let c = w.dot(d);
-                assert!((pdf - hg.eval(c)).abs() <= 1e-3 * pdf.max(1.0), "pdf of the sample");
+                assert!(
+                    (pdf - hg.eval(c)).abs() <= 1e-3 * pdf.max(1.0),
+                    "pdf of the sample"
+                );
                 counts[(((c + 1.0) * 0.5 * bins as f32) as usize).min(bins - 1)] += 1;
                 let phi = w.dot(b).atan2(w.dot(t)) + std::f32::consts::PI;
                 az[((phi / std::f32::consts::TAU * 16.0) as usize).min(15)] += 1;
@@ -120,10 +129,16 @@ mod tests {
                     (o as f64 - e).powi(2) / e
                 })
                 .sum();
-            assert!(chi < 80.0, "g = {g}: chi-square {chi} over {bins} cosine bins");
+            assert!(
+                chi < 80.0,
+                "g = {g}: chi-square {chi} over {bins} cosine bins"
+            );
             let e = n as f64 / 16.0;
             let chi_az: f64 = az.iter().map(|&o| (o as f64 - e).powi(2) / e).sum();
-            assert!(chi_az < 45.0, "g = {g}: azimuth chi-square {chi_az} over 16 bins");
+            assert!(
+                chi_az < 45.0,
+                "g = {g}: azimuth chi-square {chi_az} over 16 bins"
+            );
         }
     }
 

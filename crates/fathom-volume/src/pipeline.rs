@@ -96,7 +96,11 @@ pub fn framing_camera(bbox: &WorldBox) -> Camera {
 
 fn check_res(name: &'static str, res: u32) -> Result<(), VolumeError> {
     if !(1..=crate::grid::MAX_RES).contains(&res) {
-        return Err(VolumeError::param(name, res, format!("1..={} voxels per side", crate::grid::MAX_RES)));
+        return Err(VolumeError::param(
+            name,
+            res,
+            format!("1..={} voxels per side", crate::grid::MAX_RES),
+        ));
     }
     Ok(())
 }
@@ -113,7 +117,11 @@ pub fn build(source: &Source, limit: u64, progress: Progress) -> Result<Built, V
         } => {
             check_res("grid", *res)?;
             if *steps > MAX_STEPS {
-                return Err(VolumeError::param("steps", steps, format!("0..={MAX_STEPS}")));
+                return Err(VolumeError::param(
+                    "steps",
+                    steps,
+                    format!("0..={MAX_STEPS}"),
+                ));
             }
             let mut sim = Simulation::new(params.clone(), [*res; 3], *seed, limit)?;
             let start = Instant::now();
@@ -180,7 +188,11 @@ pub fn build(source: &Source, limit: u64, progress: Progress) -> Result<Built, V
                         let b = d.bbox;
                         (d, None, Some(b))
                     }
-                    RawGrid::Trail(t) => (physarum::density_of(&t, 0.999), Some(t.clone()), Some(t.bbox)),
+                    RawGrid::Trail(t) => (
+                        physarum::density_of(&t, 0.999),
+                        Some(t.clone()),
+                        Some(t.bbox),
+                    ),
                 }
             } else {
                 let v = vol_file::read(path, limit)?;
@@ -196,7 +208,10 @@ pub fn build(source: &Source, limit: u64, progress: Progress) -> Result<Built, V
                     }
                 }
                 Placement::FromFile => file_box.ok_or_else(|| {
-                    VolumeError::Invalid(format!("{}: the file's bounding box is not a valid box", path.display()))
+                    VolumeError::Invalid(format!(
+                        "{}: the file's bounding box is not a valid box",
+                        path.display()
+                    ))
                 })?,
                 Placement::Box(b) => *b,
             };
@@ -212,7 +227,8 @@ pub fn build(source: &Source, limit: u64, progress: Progress) -> Result<Built, V
 
 /// Whether `path` names a raw grid (extension `.raw`) rather than a `.vol`.
 pub fn is_raw(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("raw"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("raw"))
 }
 
 /// Writes the grid: `.vol` (Mitsuba; densities, the world box in the header) or `.raw`
@@ -224,7 +240,10 @@ pub fn export(path: &Path, built: &Built) -> Result<(), VolumeError> {
             None => RawGrid::Density(built.density.clone()),
         };
         raw_file::write(path, &g)
-    } else if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("vol")) {
+    } else if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vol"))
+    {
         vol_file::write(path, &built.density)
     } else {
         Err(VolumeError::Invalid(format!(
@@ -270,15 +289,34 @@ mod tests {
         for (placement, want) in [
             (Placement::Default, WorldBox::UNIT),
             (Placement::FromFile, bbox),
-            (Placement::Box(WorldBox::new(glam::Vec3::ZERO, glam::Vec3::splat(3.0)).unwrap()), WorldBox::new(glam::Vec3::ZERO, glam::Vec3::splat(3.0)).unwrap()),
+            (
+                Placement::Box(WorldBox::new(glam::Vec3::ZERO, glam::Vec3::splat(3.0)).unwrap()),
+                WorldBox::new(glam::Vec3::ZERO, glam::Vec3::splat(3.0)).unwrap(),
+            ),
         ] {
-            let b = build(&Source::File { path: vol.clone(), placement }, 1 << 20, &|_, _, _| {}).unwrap();
+            let b = build(
+                &Source::File {
+                    path: vol.clone(),
+                    placement,
+                },
+                1 << 20,
+                &|_, _, _| {},
+            )
+            .unwrap();
             assert_eq!(b.density.data(), built.density.data());
             assert_eq!(b.density.bbox, want);
         }
         let raw = tmp("g.raw");
         export(&raw, &built).unwrap();
-        let b = build(&Source::File { path: raw, placement: Placement::Default }, 1 << 20, &|_, _, _| {}).unwrap();
+        let b = build(
+            &Source::File {
+                path: raw,
+                placement: Placement::Default,
+            },
+            1 << 20,
+            &|_, _, _| {},
+        )
+        .unwrap();
         assert_eq!(b.density, built.density);
         let e = export(&tmp("g.png"), &built).err().unwrap().to_string();
         assert!(e.contains("valid extensions: .vol"), "{e}");

@@ -22,7 +22,11 @@ pub enum RawGrid {
     Trail(TrailGrid),
 }
 
-fn parse_header(path: &Path, h: &[u8], limit: u64) -> Result<(u32, [u32; 3], WorldBox, u64), VolumeError> {
+fn parse_header(
+    path: &Path,
+    h: &[u8],
+    limit: u64,
+) -> Result<(u32, [u32; 3], WorldBox, u64), VolumeError> {
     let mut f = Fields {
         path,
         bytes: h,
@@ -55,20 +59,31 @@ fn parse_header(path: &Path, h: &[u8], limit: u64) -> Result<(u32, [u32; 3], Wor
     Ok((kind, res, bbox, (HEADER_LEN + 4 * n) as u64))
 }
 
-fn finish(path: &Path, bytes: &[u8], kind: u32, res: [u32; 3], bbox: WorldBox) -> Result<RawGrid, VolumeError> {
+fn finish(
+    path: &Path,
+    bytes: &[u8],
+    kind: u32,
+    res: [u32; 3],
+    bbox: WorldBox,
+) -> Result<RawGrid, VolumeError> {
     let body = &bytes[HEADER_LEN..];
     if kind == 1 {
         let g = Grid::from_data(res, file_io::words(body, f32::from_le_bytes), bbox)?;
         g.validate_densities(&path.display().to_string())?;
         Ok(RawGrid::Density(g))
     } else {
-        Ok(RawGrid::Trail(Grid::from_data(res, file_io::words(body, u32::from_le_bytes), bbox)?))
+        Ok(RawGrid::Trail(Grid::from_data(
+            res,
+            file_io::words(body, u32::from_le_bytes),
+            bbox,
+        )?))
     }
 }
 
 /// Parses a raw grid held in memory; `path` names it in errors.
 pub fn parse(bytes: &[u8], path: &Path, limit: u64) -> Result<RawGrid, VolumeError> {
-    let (kind, res, bbox, total) = parse_header(path, &bytes[..bytes.len().min(HEADER_LEN)], limit)?;
+    let (kind, res, bbox, total) =
+        parse_header(path, &bytes[..bytes.len().min(HEADER_LEN)], limit)?;
     file_io::check_length(path, bytes.len() as u64, total)?;
     finish(path, bytes, kind, res, bbox)
 }
@@ -92,7 +107,13 @@ fn header<T: Copy + Default>(kind: u32, g: &Grid<T>) -> Vec<u8> {
     for r in g.res() {
         h.extend_from_slice(&r.to_le_bytes());
     }
-    for v in g.bbox.min.to_array().into_iter().chain(g.bbox.max.to_array()) {
+    for v in g
+        .bbox
+        .min
+        .to_array()
+        .into_iter()
+        .chain(g.bbox.max.to_array())
+    {
         h.extend_from_slice(&v.to_le_bytes());
     }
     h
@@ -119,15 +140,21 @@ mod tests {
     #[test]
     fn round_trips_are_exact_for_both_kinds() {
         let bbox = WorldBox::new(Vec3::splat(-1.0), Vec3::new(1.0, 2.0, 3.0)).unwrap();
-        let d = RawGrid::Density(Grid::from_data([3, 2, 1], vec![0.0, 1.5, 1e-30, 7.0, 0.25, 3e30], bbox).unwrap());
-        let t = RawGrid::Trail(Grid::from_data([1, 2, 3], vec![0, 1, u32::MAX, 7, 42, 1 << 31], bbox).unwrap());
+        let d = RawGrid::Density(
+            Grid::from_data([3, 2, 1], vec![0.0, 1.5, 1e-30, 7.0, 0.25, 3e30], bbox).unwrap(),
+        );
+        let t = RawGrid::Trail(
+            Grid::from_data([1, 2, 3], vec![0, 1, u32::MAX, 7, 42, 1 << 31], bbox).unwrap(),
+        );
         for (i, g) in [d, t].into_iter().enumerate() {
             let p = tmp(&format!("g{i}.raw"));
             write(&p, &g).unwrap();
             assert_eq!(read(&p, 1 << 20).unwrap(), g);
             let bytes = std::fs::read(&p).unwrap();
             assert_eq!(parse(&bytes, &p, 1 << 20).unwrap(), g);
-            let e = parse(&bytes[..bytes.len() - 1], &p, 1 << 20).unwrap_err().to_string();
+            let e = parse(&bytes[..bytes.len() - 1], &p, 1 << 20)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("truncated"), "{e}");
         }
     }
@@ -141,13 +168,33 @@ mod tests {
         let good = std::fs::read(&q).unwrap();
         let mut b = good.clone();
         b[8] = 9;
-        assert!(parse(&b, p, 1 << 20).unwrap_err().to_string().contains("voxel kind 9"));
+        assert!(
+            parse(&b, p, 1 << 20)
+                .unwrap_err()
+                .to_string()
+                .contains("voxel kind 9")
+        );
         let mut b = good.clone();
         b[12..16].copy_from_slice(&100_000u32.to_le_bytes());
-        assert!(parse(&b, p, 1 << 20).unwrap_err().to_string().contains("1..=8192"));
+        assert!(
+            parse(&b, p, 1 << 20)
+                .unwrap_err()
+                .to_string()
+                .contains("1..=8192")
+        );
         let mut b = good.clone();
         b[24..28].copy_from_slice(&f32::NAN.to_le_bytes());
-        assert!(parse(&b, p, 1 << 20).unwrap_err().to_string().contains("byte 24"));
-        assert!(parse(&good[..10], p, 1 << 20).unwrap_err().to_string().contains("truncated inside its header"));
+        assert!(
+            parse(&b, p, 1 << 20)
+                .unwrap_err()
+                .to_string()
+                .contains("byte 24")
+        );
+        assert!(
+            parse(&good[..10], p, 1 << 20)
+                .unwrap_err()
+                .to_string()
+                .contains("truncated inside its header")
+        );
     }
 }

@@ -25,10 +25,18 @@ pub const MAX_SPP: u32 = 1 << 20;
 /// Checks an image size.
 pub fn check_size(width: u32, height: u32) -> Result<(), VolumeError> {
     if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
-        return Err(VolumeError::param("size", format!("{width}x{height}"), format!("1..={MAX_SIDE} pixels per side")));
+        return Err(VolumeError::param(
+            "size",
+            format!("{width}x{height}"),
+            format!("1..={MAX_SIDE} pixels per side"),
+        ));
     }
     if width as u64 * height as u64 > MAX_PIXELS {
-        return Err(VolumeError::param("size", format!("{width}x{height}"), format!("at most {MAX_PIXELS} pixels")));
+        return Err(VolumeError::param(
+            "size",
+            format!("{width}x{height}"),
+            format!("at most {MAX_PIXELS} pixels"),
+        ));
     }
     Ok(())
 }
@@ -36,7 +44,11 @@ pub fn check_size(width: u32, height: u32) -> Result<(), VolumeError> {
 /// Checks a sample count.
 pub fn check_spp(spp: u32) -> Result<(), VolumeError> {
     if spp == 0 || spp > MAX_SPP {
-        return Err(VolumeError::param("spp", spp, format!("1..={MAX_SPP} samples per pixel")));
+        return Err(VolumeError::param(
+            "spp",
+            spp,
+            format!("1..={MAX_SPP} samples per pixel"),
+        ));
     }
     Ok(())
 }
@@ -74,7 +86,13 @@ pub struct Progressive<'a> {
 
 impl<'a> Progressive<'a> {
     /// An empty image of `width` x `height` seen by `camera`.
-    pub fn new(scene: &'a VolumeScene, camera: &Camera, width: u32, height: u32, seed: u64) -> Result<Self, VolumeError> {
+    pub fn new(
+        scene: &'a VolumeScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        seed: u64,
+    ) -> Result<Self, VolumeError> {
         check_size(width, height)?;
         scene.validate()?;
         camera.validate().map_err(VolumeError::Invalid)?;
@@ -101,7 +119,11 @@ impl<'a> Progressive<'a> {
     pub fn add_samples(&mut self, n: u32, row_done: &(dyn Fn() + Sync)) -> Result<(), VolumeError> {
         let total = self.samples as u64 + n as u64;
         if n == 0 || total > MAX_SPP as u64 {
-            return Err(VolumeError::param("spp", total, format!("1..={MAX_SPP} samples per pixel")));
+            return Err(VolumeError::param(
+                "spp",
+                total,
+                format!("1..={MAX_SPP} samples per pixel"),
+            ));
         }
         let start = Instant::now();
         let (w, h) = (self.width, self.height);
@@ -118,7 +140,9 @@ impl<'a> Progressive<'a> {
                     for s in first..first + n {
                         let mut rng = Stream::new(seed, pixel, s as u64);
                         let (jx, jy) = (rng.f32(), rng.f32());
-                        let d = frame.ray_dir(x as f64 + jx as f64, y as f64 + jy as f64, w, h).as_vec3();
+                        let d = frame
+                            .ray_dir(x as f64 + jx as f64, y as f64 + jy as f64, w, h)
+                            .as_vec3();
                         let l = scene.radiance(eye, d, &mut rng, &mut c);
                         // A non-finite sample would poison the pixel forever: drop it.
                         if l.is_finite() {
@@ -168,7 +192,14 @@ impl<'a> Progressive<'a> {
 }
 
 /// Renders `spp` samples per pixel in one go.
-pub fn render(scene: &VolumeScene, camera: &Camera, width: u32, height: u32, spp: u32, seed: u64) -> Result<(Frame, RenderStats), VolumeError> {
+pub fn render(
+    scene: &VolumeScene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u64,
+) -> Result<(Frame, RenderStats), VolumeError> {
     check_spp(spp)?;
     let mut p = Progressive::new(scene, camera, width, height, seed)?;
     p.add_samples(spp, &|| {})?;

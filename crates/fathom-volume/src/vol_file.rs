@@ -30,7 +30,10 @@ impl VolFile {
     /// The file's bounding box, if it is a valid box.
     pub fn file_box(&self) -> Result<WorldBox, VolumeError> {
         let b = self.bbox;
-        WorldBox::new(b[..3].try_into().map(glam::Vec3::from_array).unwrap(), glam::Vec3::new(b[3], b[4], b[5]))
+        WorldBox::new(
+            b[..3].try_into().map(glam::Vec3::from_array).unwrap(),
+            glam::Vec3::new(b[3], b[4], b[5]),
+        )
     }
 }
 
@@ -96,17 +99,17 @@ fn parse_header(
         ));
     }
     let bbox = f.f32s::<6>("the bounding box")?;
-    let n = check_size(
-        &path.display().to_string(),
-        res.map(u64::from),
-        4,
-        limit,
-    )?;
+    let n = check_size(&path.display().to_string(), res.map(u64::from), 4, limit)?;
     Ok((res, bbox, (HEADER_LEN + 4 * n) as u64))
 }
 
 /// Turns a whole, length-checked file into a grid, refusing NaN, infinite or negative values.
-fn finish(path: &Path, bytes: &[u8], res: [u32; 3], bbox: [f32; 6]) -> Result<VolFile, VolumeError> {
+fn finish(
+    path: &Path,
+    bytes: &[u8],
+    res: [u32; 3],
+    bbox: [f32; 6],
+) -> Result<VolFile, VolumeError> {
     let data = file_io::words(&bytes[HEADER_LEN..], f32::from_le_bytes);
     let grid = Grid::from_data(res, data, WorldBox::UNIT)?;
     grid.validate_densities(&path.display().to_string())?;
@@ -142,7 +145,13 @@ fn header(grid: &DensityGrid) -> Vec<u8> {
         h.extend_from_slice(&(r as i32).to_le_bytes());
     }
     h.extend_from_slice(&1i32.to_le_bytes());
-    for v in grid.bbox.min.to_array().into_iter().chain(grid.bbox.max.to_array()) {
+    for v in grid
+        .bbox
+        .min
+        .to_array()
+        .into_iter()
+        .chain(grid.bbox.max.to_array())
+    {
         h.extend_from_slice(&v.to_le_bytes());
     }
     h

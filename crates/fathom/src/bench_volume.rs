@@ -7,13 +7,13 @@
 use clap::Args;
 use fathom_core::presets;
 use fathom_core::tape::Tape;
+use fathom_volume::WorldBox;
 use fathom_volume::fractal;
 use fathom_volume::integrator::VolumeScene;
 use fathom_volume::light::Environment;
 use fathom_volume::medium::{Majorant, Medium, MediumParams};
 use fathom_volume::physarum::{Simulation, presets as sim_presets};
 use fathom_volume::render;
-use fathom_volume::WorldBox;
 use glam::Vec3;
 use serde_json::json;
 
@@ -53,7 +53,13 @@ pub struct VolumeBenchArgs {
 
 fn load_average() -> serde_json::Value {
     std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" ").into())
+        .map(|s| {
+            s.split_whitespace()
+                .take(3)
+                .collect::<Vec<_>>()
+                .join(" ")
+                .into()
+        })
         .unwrap_or(serde_json::Value::Null)
 }
 
@@ -68,9 +74,13 @@ fn renders(a: &VolumeBenchArgs, w: u32, h: u32) -> Result<Vec<serde_json::Value>
     let camera = presets::load("menger")?.camera;
     let mut out = Vec::new();
     for res in a.grids.split(',') {
-        let res: u32 = res.trim().parse().map_err(|_| format!("--grids: `{res}` is not a resolution"))?;
+        let res: u32 = res
+            .trim()
+            .parse()
+            .map_err(|_| format!("--grids: `{res}` is not a resolution"))?;
         let density = menger_density(res)?;
-        let filled = density.data().iter().filter(|v| **v > 0.0).count() as f64 / density.data().len() as f64;
+        let filled = density.data().iter().filter(|v| **v > 0.0).count() as f64
+            / density.data().len() as f64;
         let mut entry = serde_json::Map::new();
         entry.insert("grid".into(), format!("{res}^3").into());
         entry.insert("filled_fraction".into(), filled.into());
@@ -78,7 +88,11 @@ fn renders(a: &VolumeBenchArgs, w: u32, h: u32) -> Result<Vec<serde_json::Value>
         for (name, majorant, homogeneous_cells) in [
             ("global_majorant", Majorant::Global, false),
             ("majorant_grid", Majorant::Grid { block: 8 }, false),
-            ("majorant_grid_homogeneous_cells", Majorant::Grid { block: 8 }, true),
+            (
+                "majorant_grid_homogeneous_cells",
+                Majorant::Grid { block: 8 },
+                true,
+            ),
         ] {
             let params = MediumParams {
                 density_scale: 20.0,
@@ -96,7 +110,8 @@ fn renders(a: &VolumeBenchArgs, w: u32, h: u32) -> Result<Vec<serde_json::Value>
                 rr_depth: 5,
             };
             let load = load_average();
-            let (frame, st) = render::render(&scene, &camera, w, h, a.spp, 1).map_err(|e| e.to_string())?;
+            let (frame, st) =
+                render::render(&scene, &camera, w, h, a.spp, 1).map_err(|e| e.to_string())?;
             let mean = frame.colour.iter().map(|c| c[1] as f64).sum::<f64>() / frame.len() as f64;
             pps.push(st.paths_per_second);
             entry.insert(
@@ -113,7 +128,10 @@ fn renders(a: &VolumeBenchArgs, w: u32, h: u32) -> Result<Vec<serde_json::Value>
             );
         }
         entry.insert("grid_vs_global_speedup".into(), (pps[1] / pps[0]).into());
-        entry.insert("grid_homogeneous_vs_global_speedup".into(), (pps[2] / pps[0]).into());
+        entry.insert(
+            "grid_homogeneous_vs_global_speedup".into(),
+            (pps[2] / pps[0]).into(),
+        );
         out.push(serde_json::Value::Object(entry));
     }
     Ok(out)
@@ -131,7 +149,10 @@ fn physarum(a: &VolumeBenchArgs) -> Result<Vec<serde_json::Value>, String> {
         let mut phases = [0f64; 4];
         for _ in 0..a.steps {
             let t = sim.step();
-            for (s, v) in phases.iter_mut().zip([t.sort_ms, t.move_ms, t.deposit_ms, t.diffuse_ms]) {
+            for (s, v) in phases
+                .iter_mut()
+                .zip([t.sort_ms, t.move_ms, t.deposit_ms, t.diffuse_ms])
+            {
                 *s += v / a.steps as f64;
             }
         }
@@ -163,8 +184,16 @@ pub fn run(a: VolumeBenchArgs) -> Result<(), String> {
         .build()
         .map_err(|e| e.to_string())?;
     let load_start = load_average();
-    let render = if a.no_render { Vec::new() } else { pool.install(|| renders(&a, w, h))? };
-    let sim = if a.no_physarum { Vec::new() } else { pool.install(|| physarum(&a))? };
+    let render = if a.no_render {
+        Vec::new()
+    } else {
+        pool.install(|| renders(&a, w, h))?
+    };
+    let sim = if a.no_physarum {
+        Vec::new()
+    } else {
+        pool.install(|| physarum(&a))?
+    };
     let doc = json!({
         "bench": "volume",
         "size": format!("{w}x{h}"),
@@ -176,6 +205,9 @@ pub fn run(a: VolumeBenchArgs) -> Result<(), String> {
         "render": render,
         "physarum": sim,
     });
-    println!("{}", serde_json::to_string_pretty(&doc).map_err(|e| e.to_string())?);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&doc).map_err(|e| e.to_string())?
+    );
     Ok(())
 }

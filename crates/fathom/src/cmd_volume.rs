@@ -4,13 +4,13 @@
 use clap::{Args, ValueEnum};
 use fathom_core::{presets, scene_file};
 use fathom_volume::VolumeError;
+use fathom_volume::WorldBox;
 use fathom_volume::integrator::VolumeScene;
 use fathom_volume::light::{Environment, Sun};
 use fathom_volume::medium::{Majorant, Medium, MediumParams};
 use fathom_volume::physarum::{self, Boundary};
 use fathom_volume::pipeline::{self, Placement, Source};
 use fathom_volume::render::{self, Progressive};
-use fathom_volume::WorldBox;
 use glam::{DVec3, Vec3};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -56,7 +56,7 @@ pub enum MajorantArg {
 ///   fathom volume --sim physarum --preset cage --emission 4 --env 0 -o glow.png   (emissive)
 ///   fathom volume --preset menger --eye 0.1,0.2,0.3 --target 1,0,0 -o inside.png   (camera inside)
 #[derive(Args, Debug)]
-#[command(verbatim_doc_comment)]
+#[command(verbatim_doc_comment, allow_negative_numbers = true)]
 pub struct VolumeArgs {
     /// Grow the density with this simulation (the default when no scene or file is given).
     #[arg(long, value_enum)]
@@ -199,7 +199,11 @@ pub struct VolumeArgs {
 fn floats<const N: usize>(name: &str, s: &str, broadcast: bool) -> Result<[f32; N], String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let bad = || {
-        let one = if broadcast { " (or one number for all)" } else { "" };
+        let one = if broadcast {
+            " (or one number for all)"
+        } else {
+            ""
+        };
         format!("--{name} `{s}` must be {N} comma-separated numbers{one}")
     };
     let v: Vec<f32> = parts
@@ -224,7 +228,8 @@ fn colour(name: &str, s: &str) -> Result<Vec3, String> {
 
 fn parse_box(s: &str) -> Result<WorldBox, String> {
     let b = floats::<6>("box", s, false)?;
-    WorldBox::new(Vec3::new(b[0], b[1], b[2]), Vec3::new(b[3], b[4], b[5])).map_err(|e| e.to_string())
+    WorldBox::new(Vec3::new(b[0], b[1], b[2]), Vec3::new(b[3], b[4], b[5]))
+        .map_err(|e| e.to_string())
 }
 
 fn grid_res(a: &VolumeArgs, default: u32) -> Result<u32, String> {
@@ -376,7 +381,18 @@ pub fn run(a: VolumeArgs) -> Result<(), String> {
         .num_threads(a.threads.unwrap_or(0))
         .build()
         .map_err(|e| e.to_string())?;
-    pool.install(|| run_in_pool(&a, src, params, environment, sun, output, (width, height), limit))
+    pool.install(|| {
+        run_in_pool(
+            &a,
+            src,
+            params,
+            environment,
+            sun,
+            output,
+            (width, height),
+            limit,
+        )
+    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -404,17 +420,28 @@ fn run_in_pool(
         pipeline::export(p, &built).map_err(|e| e.to_string())?;
         if !a.quiet {
             let r = built.density.res();
-            eprintln!("volume: wrote {}x{}x{} grid to {}", r[0], r[1], r[2], p.display());
+            eprintln!(
+                "volume: wrote {}x{}x{} grid to {}",
+                r[0],
+                r[1],
+                r[2],
+                p.display()
+            );
         }
     }
     let mut stats = serde_json::Map::new();
     if let Some(s) = &built.sim {
-        stats.insert("simulation".into(), serde_json::to_value(s).map_err(|e| e.to_string())?);
+        stats.insert(
+            "simulation".into(),
+            serde_json::to_value(s).map_err(|e| e.to_string())?,
+        );
     }
     if let Some(out) = &output {
         let mut camera = built.camera.clone();
         let dv = |name: &str, s: &Option<String>| -> Result<Option<DVec3>, String> {
-            s.as_deref().map(|s| vec3(name, s).map(|v| v.as_dvec3())).transpose()
+            s.as_deref()
+                .map(|s| vec3(name, s).map(|v| v.as_dvec3()))
+                .transpose()
         };
         if let Some(v) = dv("eye", &a.eye)? {
             camera.eye = v;
@@ -435,17 +462,22 @@ fn run_in_pool(
             max_depth: a.max_depth,
             rr_depth: a.rr_depth,
         };
-        let mut prog = Progressive::new(&scene, &camera, width, height, a.seed).map_err(|e| e.to_string())?;
+        let mut prog =
+            Progressive::new(&scene, &camera, width, height, a.seed).map_err(|e| e.to_string())?;
         let pb = bar(a.quiet, a.spp as u64 * height as u64, "render");
         // Passes of a few samples: the same image as one pass (each sample has its own stream).
         let pass = (a.spp / 8).max(1);
         while prog.samples() < a.spp {
             let n = pass.min(a.spp - prog.samples());
-            prog.add_samples(n, &|| pb.inc(n as u64)).map_err(|e| e.to_string())?;
+            prog.add_samples(n, &|| pb.inc(n as u64))
+                .map_err(|e| e.to_string())?;
         }
         pb.finish();
         let frame = prog.frame();
-        if out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        if out
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+        {
             pipeline::save_exr(&frame, out).map_err(|e| e.to_string())?;
         } else {
             let f = fathom_trace::output::open_output(out)?;
@@ -464,11 +496,147 @@ fn run_in_pool(
                 st.majorant_steps_per_path
             );
         }
-        stats.insert("render".into(), serde_json::to_value(st).map_err(|e| e.to_string())?);
+        stats.insert(
+            "render".into(),
+            serde_json::to_value(st).map_err(|e| e.to_string())?,
+        );
     }
     if let Some(p) = &a.stats {
-        let text = serde_json::to_string_pretty(&serde_json::Value::Object(stats)).map_err(|e| e.to_string())?;
+        let text = serde_json::to_string_pretty(&serde_json::Value::Object(stats))
+            .map_err(|e| e.to_string())?;
         std::fs::write(p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::FromArgMatches;
+
+    fn args(list: &[&str]) -> VolumeArgs {
+        let cmd = VolumeArgs::augment_args(clap::Command::new("volume"));
+        let m = cmd
+            .try_get_matches_from(std::iter::once("volume").chain(list.iter().copied()))
+            .unwrap_or_else(|e| panic!("{list:?}: {e}"));
+        VolumeArgs::from_arg_matches(&m).unwrap()
+    }
+
+    fn tmp(name: &str) -> String {
+        let d = std::env::temp_dir().join(format!("fathom-cmd-volume-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d.join(name).display().to_string()
+    }
+
+    #[test]
+    fn bad_input_gives_clear_errors() {
+        let out = tmp("bad.png");
+        let truncated = tmp("truncated.vol");
+        std::fs::write(&truncated, b"VOL\x03\x01\0\0\0\x02\0\0\0").unwrap();
+        let cases: Vec<(Vec<&str>, &str)> = vec![
+            (vec!["--spp", "0"], "spp = 0 is out of range: 1..="),
+            (vec!["--g", "1"], "g = 1 is out of range: (-1, 1)"),
+            (
+                vec!["--albedo", "0.5,2,0.5"],
+                "albedo = 2 is out of range: [0, 1]",
+            ),
+            (
+                vec!["--albedo", "red"],
+                "--albedo `red` must be 3 comma-separated numbers (or one number for all)",
+            ),
+            (
+                vec!["--env", "nan"],
+                "--env `nan` must be 3 comma-separated numbers",
+            ),
+            (vec!["--density-scale", "-3"], "density scale = -3"),
+            (
+                vec!["--sim", "physarum", "--grid", "0"],
+                "grid = 0 is out of range: 1..=8192",
+            ),
+            (
+                vec!["--sim", "physarum", "--grid", "big"],
+                "--grid `big`: with --sim, --scene or --preset, --grid is the resolution",
+            ),
+            (
+                vec!["--sim", "physarum", "--preset", "tendril"],
+                "valid presets: tendrils, sheets, lattice, cage",
+            ),
+            (
+                vec!["--sim", "physarum", "--decay", "2"],
+                "decay = 2 is out of range: [0, 1]",
+            ),
+            (vec!["--sim", "physarum", "--grid", "4096"], "memory limit"),
+            (vec!["--preset", "menger", "--box", "1,1,1,0,0,0"], "box ="),
+            (vec!["--preset", "mengr"], "did you mean `menger`"),
+            (vec!["--grid", "/nonexistent/x.vol"], "/nonexistent/x.vol"),
+            (
+                vec!["--grid", truncated.as_str()],
+                "truncated inside its header (expected the y resolution)",
+            ),
+            (vec!["--sun", "0,0,0"], "--sun 0,0,0"),
+            (vec!["--size", "0x10"], "size"),
+            (vec!["--max-depth", "1000000"], "max depth = 1000000"),
+        ];
+        for (list, want) in cases {
+            let mut full = list.clone();
+            for (flag, value) in [("--size", "8x8"), ("--spp", "1"), ("--steps", "1")] {
+                if !list.contains(&flag) {
+                    full.extend([flag, value]);
+                }
+            }
+            full.extend(["-o", out.as_str(), "--quiet"]);
+            let e = run(args(&full))
+                .err()
+                .unwrap_or_else(|| panic!("{list:?} should fail"));
+            assert!(e.contains(want), "{list:?}: expected `{want}` in: {e}");
+        }
+    }
+
+    #[test]
+    fn a_small_simulation_renders_exports_and_reports() {
+        let (png, exr, vol, raw, stats) = (
+            tmp("s.png"),
+            tmp("s.exr"),
+            tmp("s.vol"),
+            tmp("s.raw"),
+            tmp("s.json"),
+        );
+        let common = [
+            "--sim", "physarum", "--grid", "16", "--steps", "4", "--size", "8x6", "--spp", "2",
+            "--quiet",
+        ];
+        run(args(
+            &[
+                &common[..],
+                &["-o", &png, "--export", &vol, "--stats", &stats],
+            ]
+            .concat(),
+        ))
+        .unwrap();
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert!(
+            s["render"]["paths_per_second"].as_f64().unwrap() > 0.0,
+            "{s}"
+        );
+        assert_eq!(s["simulation"]["steps"], 4);
+        assert_eq!(image::open(&png).unwrap().width(), 8);
+        run(args(
+            &[&common[..], &["-o", &exr, "--export", &raw]].concat(),
+        ))
+        .unwrap();
+        assert!(
+            image::open(&exr).unwrap().as_rgb32f().is_some(),
+            "EXR is float RGB"
+        );
+        // The exported grid renders from the file.
+        run(args(&[
+            "--grid", &vol, "--box", "file", "--size", "4x4", "--spp", "1", "-o", &png, "--quiet",
+        ]))
+        .unwrap();
+        run(args(&[
+            "--grid", &raw, "--size", "4x4", "--spp", "1", "-o", &png, "--quiet",
+        ]))
+        .unwrap();
+    }
 }

@@ -62,13 +62,22 @@ fn homogeneous_slab_transmittance_is_beer_lambert() {
                 let nf = n as f64;
                 let p = through as f64 / nf;
                 let se = (want * (1.0 - want) / nf).sqrt();
-                assert!((p - want).abs() < 5.0 * se + 1e-4, "delta tracking {maj:?} {hom}: {p} vs {want} (d = {thickness}, scale {scale}, cos {cos})");
+                assert!(
+                    (p - want).abs() < 5.0 * se + 1e-4,
+                    "delta tracking {maj:?} {hom}: {p} vs {want} (d = {thickness}, scale {scale}, cos {cos})"
+                );
                 let mean = ratio / nf;
                 let var = (ratio2 / nf - mean * mean).max(0.0);
                 let se = (var / nf).sqrt();
-                assert!((mean - want).abs() < 5.0 * se + 1e-4, "ratio tracking {maj:?} {hom}: {mean} vs {want} +- {se}");
+                assert!(
+                    (mean - want).abs() < 5.0 * se + 1e-4,
+                    "ratio tracking {maj:?} {hom}: {mean} vs {want} +- {se}"
+                );
                 if maj == Majorant::Global {
-                    assert!(c.null_collisions > 0, "the global majorant should make null collisions");
+                    assert!(
+                        c.null_collisions > 0,
+                        "the global majorant should make null collisions"
+                    );
                 }
             }
         }
@@ -81,7 +90,9 @@ fn homogeneous_slab_transmittance_is_beer_lambert() {
 fn majorant_choice_changes_no_expectation() {
     let mut r = Stream::new(2, 2, 2);
     let res = [12, 12, 12];
-    let data = (0..12 * 12 * 12).map(|_| if r.f32() < 0.5 { 0.0 } else { r.f32() * 2.0 }).collect();
+    let data = (0..12 * 12 * 12)
+        .map(|_| if r.f32() < 0.5 { 0.0 } else { r.f32() * 2.0 })
+        .collect();
     let g = Grid::from_data(res, data, WorldBox::UNIT).unwrap();
     let o = Vec3::new(-0.5, 0.1, 0.2);
     let d = Vec3::new(1.0, 0.35, 0.5).normalize();
@@ -97,7 +108,9 @@ fn majorant_choice_changes_no_expectation() {
             let t = m.transmittance(o, d, t0, t1, &mut rng, &mut c) as f64;
             tr += t;
             tr2 += t * t;
-            let f = m.sample_flight(o, d, t0, t1, &mut rng, &mut c).map_or(t1, |c| c.t) as f64;
+            let f = m
+                .sample_flight(o, d, t0, t1, &mut rng, &mut c)
+                .map_or(t1, |c| c.t) as f64;
             dist += f;
             dist2 += f * f;
         }
@@ -107,9 +120,18 @@ fn majorant_choice_changes_no_expectation() {
     }
     let (a, sa, b, sb, lookups_global) = results[0];
     for &(x, sx, y, sy, lookups) in &results[1..] {
-        assert!((x - a).abs() < 5.0 * (sx * sx + sa * sa).sqrt(), "transmittance {x} vs {a}");
-        assert!((y - b).abs() < 5.0 * (sy * sy + sb * sb).sqrt(), "free-flight distance {y} vs {b}");
-        assert!(lookups < lookups_global, "the majorant grid should save lookups");
+        assert!(
+            (x - a).abs() < 5.0 * (sx * sx + sa * sa).sqrt(),
+            "transmittance {x} vs {a}"
+        );
+        assert!(
+            (y - b).abs() < 5.0 * (sy * sy + sb * sb).sqrt(),
+            "free-flight distance {y} vs {b}"
+        );
+        assert!(
+            lookups < lookups_global,
+            "the majorant grid should save lookups"
+        );
     }
 }
 
@@ -117,12 +139,48 @@ fn majorant_choice_changes_no_expectation() {
 fn bad_parameters_name_their_range() {
     let g = slab(1.0);
     let cases = [
-        (MediumParams { density_scale: -1.0, ..MediumParams::default() }, "density scale = -1"),
-        (MediumParams { density_scale: f32::NAN, ..MediumParams::default() }, "density scale = NaN"),
-        (MediumParams { albedo: Vec3::new(0.5, 1.5, 0.5), ..MediumParams::default() }, "albedo = 1.5 is out of range: [0, 1]"),
-        (MediumParams { g: 1.0, ..MediumParams::default() }, "g = 1"),
-        (MediumParams { majorant: Majorant::Grid { block: 0 }, ..MediumParams::default() }, "majorant block = 0"),
-        (MediumParams { emission: 1e9, ..MediumParams::default() }, "emission = 1000000000"),
+        (
+            MediumParams {
+                density_scale: -1.0,
+                ..MediumParams::default()
+            },
+            "density scale = -1",
+        ),
+        (
+            MediumParams {
+                density_scale: f32::NAN,
+                ..MediumParams::default()
+            },
+            "density scale = NaN",
+        ),
+        (
+            MediumParams {
+                albedo: Vec3::new(0.5, 1.5, 0.5),
+                ..MediumParams::default()
+            },
+            "albedo = 1.5 is out of range: [0, 1]",
+        ),
+        (
+            MediumParams {
+                g: 1.0,
+                ..MediumParams::default()
+            },
+            "g = 1",
+        ),
+        (
+            MediumParams {
+                majorant: Majorant::Grid { block: 0 },
+                ..MediumParams::default()
+            },
+            "majorant block = 0",
+        ),
+        (
+            MediumParams {
+                emission: 1e9,
+                ..MediumParams::default()
+            },
+            "emission = 1000000000",
+        ),
     ];
     for (p, want) in cases {
         let e = Medium::new(g.clone(), &p).unwrap_err().to_string();

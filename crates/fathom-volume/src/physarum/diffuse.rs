@@ -29,7 +29,15 @@ struct Buffers {
 }
 
 /// The x-y 3x3 box sum of `plane` (`rx` x `ry`) into `out`.
-fn plane_sum(plane: &[u32], rx: usize, ry: usize, b: Boundary, row: &mut [f32], xsum: &mut [f32], out: &mut [f32]) {
+fn plane_sum(
+    plane: &[u32],
+    rx: usize,
+    ry: usize,
+    b: Boundary,
+    row: &mut [f32],
+    xsum: &mut [f32],
+    out: &mut [f32],
+) {
     for (src, t) in plane.chunks_exact(rx).zip(xsum.chunks_exact_mut(rx)) {
         for (f, &v) in row.iter_mut().zip(src) {
             *f = v as f32;
@@ -46,7 +54,11 @@ fn plane_sum(plane: &[u32], rx: usize, ry: usize, b: Boundary, row: &mut [f32], 
     }
     for (y, o) in out.chunks_exact_mut(rx).enumerate() {
         let (a, c) = neighbours(y, ry, b);
-        let (ta, tb, tc) = (&xsum[a * rx..][..rx], &xsum[y * rx..][..rx], &xsum[c * rx..][..rx]);
+        let (ta, tb, tc) = (
+            &xsum[a * rx..][..rx],
+            &xsum[y * rx..][..rx],
+            &xsum[c * rx..][..rx],
+        );
         for (((o, &p), &q), &r) in o.iter_mut().zip(ta).zip(tb).zip(tc) {
             *o = p + q + r;
         }
@@ -54,7 +66,14 @@ fn plane_sum(plane: &[u32], rx: usize, ry: usize, b: Boundary, row: &mut [f32], 
 }
 
 /// `dst = decay * ((1 - diffusion) src + diffusion * box3(src))`, capped at [`CELL_MAX`].
-pub fn diffuse(src: &[u32], dst: &mut [u32], res: [u32; 3], diffusion: f32, decay: f32, b: Boundary) {
+pub fn diffuse(
+    src: &[u32],
+    dst: &mut [u32],
+    res: [u32; 3],
+    diffusion: f32,
+    decay: f32,
+    b: Boundary,
+) {
     let [rx, ry, rz] = res.map(|r| r as usize);
     let plane = rx * ry;
     let keep = decay * (1.0 - diffusion);
@@ -75,13 +94,39 @@ pub fn diffuse(src: &[u32], dst: &mut [u32], res: [u32; 3], diffusion: f32, deca
             };
             let slot = |z: usize| z % 3;
             let (below, _) = neighbours(z0, rz, b);
-            plane_sum(src_plane(below), rx, ry, b, &mut w.row, &mut w.xsum, &mut w.ring[slot(z0 + 2)]);
-            plane_sum(src_plane(z0), rx, ry, b, &mut w.row, &mut w.xsum, &mut w.ring[slot(z0)]);
+            plane_sum(
+                src_plane(below),
+                rx,
+                ry,
+                b,
+                &mut w.row,
+                &mut w.xsum,
+                &mut w.ring[slot(z0 + 2)],
+            );
+            plane_sum(
+                src_plane(z0),
+                rx,
+                ry,
+                b,
+                &mut w.row,
+                &mut w.xsum,
+                &mut w.ring[slot(z0)],
+            );
             for (z, o) in (z0..z1).zip(out.chunks_exact_mut(plane)) {
                 let (_, above) = neighbours(z, rz, b);
-                plane_sum(src_plane(above), rx, ry, b, &mut w.row, &mut w.xsum, &mut w.ring[slot(z + 1)]);
+                plane_sum(
+                    src_plane(above),
+                    rx,
+                    ry,
+                    b,
+                    &mut w.row,
+                    &mut w.xsum,
+                    &mut w.ring[slot(z + 1)],
+                );
                 let (pa, pb, pc) = (&w.ring[slot(z + 2)], &w.ring[slot(z)], &w.ring[slot(z + 1)]);
-                for ((((o, &s), &a), &b), &c) in o.iter_mut().zip(src_plane(z)).zip(pa).zip(pb).zip(pc) {
+                for ((((o, &s), &a), &b), &c) in
+                    o.iter_mut().zip(src_plane(z)).zip(pa).zip(pb).zip(pc)
+                {
                     let v = keep * s as f32 + spread * (a + b + c);
                     // v >= 0; through i32, which the vector units convert to directly.
                     *o = v.min(CELL_MAX as f32) as i32 as u32;
@@ -103,7 +148,11 @@ mod tests {
             for y in 0..ry {
                 for x in 0..rx {
                     let mut sum = 0.0f64;
-                    let (xs, ys, zs) = (neighbours(x, rx, b), neighbours(y, ry, b), neighbours(z, rz, b));
+                    let (xs, ys, zs) = (
+                        neighbours(x, rx, b),
+                        neighbours(y, ry, b),
+                        neighbours(z, rz, b),
+                    );
                     for zz in [zs.0, z, zs.1] {
                         for yy in [ys.0, y, ys.1] {
                             for xx in [xs.0, x, xs.1] {
@@ -111,7 +160,9 @@ mod tests {
                             }
                         }
                     }
-                    let v = decay as f64 * ((1.0 - diffusion as f64) * at(x, y, z) as f64 + diffusion as f64 * sum / 27.0);
+                    let v = decay as f64
+                        * ((1.0 - diffusion as f64) * at(x, y, z) as f64
+                            + diffusion as f64 * sum / 27.0);
                     out[x + rx * (y + ry * z)] = v as u32;
                 }
             }

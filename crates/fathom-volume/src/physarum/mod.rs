@@ -36,7 +36,9 @@ pub struct Agent {
 impl PartialEq for Agent {
     fn eq(&self, o: &Agent) -> bool {
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-        bits(self.pos) == bits(o.pos) && bits(self.forward) == bits(o.forward) && bits(self.up) == bits(o.up)
+        bits(self.pos) == bits(o.pos)
+            && bits(self.forward) == bits(o.forward)
+            && bits(self.up) == bits(o.up)
     }
 }
 
@@ -57,15 +59,19 @@ pub struct StepTimes {
 const RING: [f32; 3] = [0.0, 120.0, 240.0];
 
 /// Per-step constants derived from the parameters.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct Steering {
     sensor_cos: f32,
     sensor_sin: f32,
     turn_cos: f32,
     turn_sin: f32,
     ring: [(f32, f32); 3],
-    roll: f32,
+    /// (cos, sin) of roll angles evenly spaced over [-roll, roll] (empty: no roll).
+    roll: Vec<(f32, f32)>,
 }
+
+/// Roll angles an agent chooses from each step.
+const ROLL_STEPS: usize = 256;
 
 /// A running simulation.
 pub struct Simulation {
@@ -152,7 +158,7 @@ impl Simulation {
             turn_cos: rad(p.turn_angle).cos(),
             turn_sin: rad(p.turn_angle).sin(),
             ring: RING.map(|a| (rad(a).cos(), rad(a).sin())),
-            roll: rad(p.roll),
+            roll: roll_table(rad(p.roll)),
         };
         let (res, trail) = (self.res, &self.trail);
         let (sd, step, boundary) = (p.sensor_distance, p.step_size, p.boundary);
@@ -168,7 +174,14 @@ impl Simulation {
         let t1 = Instant::now();
         self.deposit();
         let t2 = Instant::now();
-        diffuse::diffuse(&self.trail, &mut self.scratch, self.res, diffusion, decay, boundary);
+        diffuse::diffuse(
+            &self.trail,
+            &mut self.scratch,
+            self.res,
+            diffusion,
+            decay,
+            boundary,
+        );
         std::mem::swap(&mut self.trail, &mut self.scratch);
         self.steps += 1;
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
@@ -181,38 +194,61 @@ impl Simulation {
         }
     }
 
-    /// Re-orders the agents along a Morton curve of their voxels, so that agents next to each
-    /// other in memory read nearby voxels (the grid does not fit in cache). The order of the
-    /// agents changes nothing else: each carries its own random stream, and the deposits are
-    /// integer sums. Keys are unique (voxel code, old index), so the order is deterministic.
+    /// Re-orders the agents by the block of voxels they are in (a stable counting sort), so
+    /// that agents next to each other in memory read nearby voxels: the grid does not fit in
+    /// cache. The order of the agents changes nothing else (each carries its own random
+    /// stream; the deposits are integer sums), and a stable sort of the same agents gives the
+    /// same order on any thread count.
     fn sort_agents(&mut self) {
-        let mut keys: Vec<(u64, u32)> = self
+        let blocks = self.res.map(|r| r.div_ceil(SORT_BLOCK));
+        let key = |a: &Agent| {
+            let b = |k: usize| (a.pos[k] as u32 / SORT_BLOCK).min(blocks[k] - 1);
+            (b(0) + blocks[0] * (b(1) + blocks[1] * b(2))) as usize
+        };
+        let keys: Vec<u32> = self.agents.par_iter().map(|a| key(a) as u32).collect();
+        let mut start = vec![0usize; (blocks[0] * blocks[1] * blocks[2]) as usize + 1];
+        for &k in &keys {
+            start[k as usize + 1] += 1;
+        }
+        for i in 1..start.len() {
+            start[i] += start[i - 1];
+        }
+        let mut order = vec![0u32; keys.len()];
+        for (i, &k) in keys.iter().enumerate() {
+            order[start[k as usize]] = i as u32;
+            start[k as usize] += 1;
+        }
+        self.agents = order
+            .par_iter()
+            .map(|&i| self.agents[i as usize].clone())
+            .collect();
+        self.cells = self
             .agents
             .par_iter()
-            .enumerate()
-            .map(|(i, a)| (morton(a.pos), i as u32))
+            .map(|a| cell_of(a.pos, self.res))
             .collect();
-        keys.par_sort_unstable();
-        self.agents = keys.par_iter().map(|&(_, i)| self.agents[i as usize].clone()).collect();
-        self.cells = self.agents.par_iter().map(|a| cell_of(a.pos, self.res)).collect();
     }
 
     /// Adds every agent's deposit to its voxel: slabs of z planes in parallel, each scanning
     /// all agents' voxels and adding those inside it.
     fn deposit(&mut self) {
         let plane = (self.res[0] * self.res[1]) as usize;
-        let slabs = (4 * rayon::current_num_threads()).min(self.res[2] as usize);
+        // One slab per thread: each scans every agent's voxel once.
+        let slabs = rayon::current_num_threads().min(self.res[2] as usize);
         let per = (self.res[2] as usize).div_ceil(slabs) * plane;
         let (cells, dep) = (&self.cells, self.params.deposit);
-        self.trail.par_chunks_mut(per).enumerate().for_each(|(k, slab)| {
-            let (lo, hi) = ((k * per) as u32, (k * per + slab.len()) as u32);
-            for &c in cells {
-                if c >= lo && c < hi {
-                    let v = &mut slab[(c - lo) as usize];
-                    *v = v.saturating_add(dep);
+        self.trail
+            .par_chunks_mut(per)
+            .enumerate()
+            .for_each(|(k, slab)| {
+                let (lo, hi) = ((k * per) as u32, (k * per + slab.len()) as u32);
+                for &c in cells {
+                    if c >= lo && c < hi {
+                        let v = &mut slab[(c - lo) as usize];
+                        *v = v.saturating_add(dep);
+                    }
                 }
-            }
-        });
+            });
     }
 
     /// The trail counts as a grid over a box centred at the origin whose longest side is 2.
@@ -236,7 +272,12 @@ pub fn default_box(res: [u32; 3]) -> WorldBox {
 
 /// Trail counts to densities, normalised by the `q` quantile of the non-zero counts.
 pub fn density_of(trail: &TrailGrid, q: f64) -> DensityGrid {
-    let mut nz: Vec<u32> = trail.data().par_iter().copied().filter(|&v| v > 0).collect();
+    let mut nz: Vec<u32> = trail
+        .data()
+        .par_iter()
+        .copied()
+        .filter(|&v| v > 0)
+        .collect();
     let norm = if nz.is_empty() {
         1.0
     } else {
@@ -250,19 +291,8 @@ pub fn density_of(trail: &TrailGrid, q: f64) -> DensityGrid {
 /// Steps between re-orderings of the agents.
 const RESORT_EVERY: u64 = 8;
 
-/// The Morton code of the voxel holding `pos` (13 bits per axis, enough for [`crate::grid::MAX_RES`]).
-fn morton(pos: Vec3) -> u64 {
-    let spread = |v: f32| {
-        let mut x = (v as u64) & 0x1fff;
-        let mut out = 0u64;
-        for b in 0..13 {
-            out |= ((x & 1) << (3 * b)) as u64;
-            x >>= 1;
-        }
-        out
-    };
-    spread(pos.x) | spread(pos.y) << 1 | spread(pos.z) << 2
-}
+/// Side of the voxel blocks the agents are sorted by.
+const SORT_BLOCK: u32 = 8;
 
 /// The storage index of the voxel holding `pos` (which is inside the grid).
 #[inline(always)]
@@ -271,22 +301,52 @@ fn cell_of(pos: Vec3, res: [u32; 3]) -> u32 {
     c(0) + res[0] * (c(1) + res[1] * c(2))
 }
 
+/// The voxel coordinate of `v` along an axis of `r` voxels, wrapped or clamped.
+#[inline(always)]
+fn axis_index(v: f32, r: i32, b: Boundary) -> i32 {
+    let i = v.floor() as i32;
+    match b {
+        // Sensors reach less than a grid side past it in all but tiny grids: one add or
+        // subtract instead of a division.
+        Boundary::Wrap if i < 0 => {
+            if i + r >= 0 {
+                i + r
+            } else {
+                i.rem_euclid(r)
+            }
+        }
+        Boundary::Wrap if i >= r => {
+            if i - r < r {
+                i - r
+            } else {
+                i.rem_euclid(r)
+            }
+        }
+        Boundary::Wrap => i,
+        Boundary::Walls => i.clamp(0, r - 1),
+    }
+}
+
 /// The trail count at `p` (nearest voxel), outside the grid wrapped or clamped.
 #[inline(always)]
 fn sense(trail: &[u32], res: [u32; 3], p: Vec3, b: Boundary) -> u32 {
-    let c = |a: usize| {
-        let r = res[a] as i32;
-        let i = p[a].floor() as i32;
-        match b {
-            // Sensors reach less than a grid side past it in all but tiny grids: one add or
-            // subtract instead of a division.
-            Boundary::Wrap if i < 0 => if i + r >= 0 { i + r } else { i.rem_euclid(r) },
-            Boundary::Wrap if i >= r => if i - r < r { i - r } else { i.rem_euclid(r) },
-            Boundary::Wrap => i,
-            Boundary::Walls => i.clamp(0, r - 1),
-        }
-    };
-    trail[(c(0) + res[0] as i32 * (c(1) + res[1] as i32 * c(2))) as usize]
+    let x = axis_index(p.x, res[0] as i32, b);
+    let y = axis_index(p.y, res[1] as i32, b);
+    let z = axis_index(p.z, res[2] as i32, b);
+    trail[(x + res[0] as i32 * (y + res[1] as i32 * z)) as usize]
+}
+
+/// (cos, sin) of [`ROLL_STEPS`] angles evenly spaced over [-roll, roll]; empty for no roll.
+fn roll_table(roll: f32) -> Vec<(f32, f32)> {
+    if roll <= 0.0 {
+        return Vec::new();
+    }
+    (0..ROLL_STEPS)
+        .map(|i| {
+            let psi = roll * (2.0 * (i as f32 + 0.5) / ROLL_STEPS as f32 - 1.0);
+            (psi.cos(), psi.sin())
+        })
+        .collect()
 }
 
 /// A new agent, placed and oriented by the spawn rule.
@@ -307,12 +367,25 @@ fn spawn(p: &Params, size: Vec3, mut rng: Stream) -> Agent {
     };
     let pos = pos.clamp(Vec3::ZERO, size - 1e-3);
     let up = basis(forward).0;
-    Agent { pos, forward, up, rng }
+    Agent {
+        pos,
+        forward,
+        up,
+        rng,
+    }
 }
 
 /// Sense, turn, roll, move (with the boundary rule) for one agent.
 #[inline(always)]
-fn move_agent(a: &mut Agent, s: &Steering, sd: f32, step: f32, b: Boundary, res: [u32; 3], trail: &[u32]) {
+fn move_agent(
+    a: &mut Agent,
+    s: &Steering,
+    sd: f32,
+    step: f32,
+    b: Boundary,
+    res: [u32; 3],
+    trail: &[u32],
+) {
     let right = a.forward.cross(a.up);
     let ring_dir = |k: usize| a.up * s.ring[k].0 + right * s.ring[k].1;
     let mut best = sense(trail, res, a.pos + a.forward * sd, b);
@@ -330,7 +403,11 @@ fn move_agent(a: &mut Agent, s: &Steering, sd: f32, step: f32, b: Boundary, res:
             n += 1;
         }
     }
-    let choice = if n == 1 { ties[0] } else { ties[a.rng.below(n as u32) as usize] };
+    let choice = if n == 1 {
+        ties[0]
+    } else {
+        ties[a.rng.below(n as u32) as usize]
+    };
     if choice > 0 {
         // Rotate the frame in the plane of forward and the chosen ring direction
         // d = cos(phi) up + sin(phi) right: forward turns toward d, d turns to d2, and
@@ -343,14 +420,16 @@ fn move_agent(a: &mut Agent, s: &Steering, sd: f32, step: f32, b: Boundary, res:
         a.forward = a.forward * s.turn_cos + d * s.turn_sin;
         a.up = d2 * c - e * sn;
     }
-    if s.roll > 0.0 {
-        let psi = (2.0 * a.rng.f32() - 1.0) * s.roll;
-        let (ps, pc) = psi.sin_cos();
+    if !s.roll.is_empty() {
+        let (pc, ps) = s.roll[a.rng.below(ROLL_STEPS as u32) as usize];
         let right = a.forward.cross(a.up);
         a.up = a.up * pc + right * ps;
     }
-    a.forward = a.forward.normalize();
-    a.up = (a.up - a.forward * a.forward.dot(a.up)).normalize();
+    // The rotations keep the frame orthonormal up to rounding: one Newton step of 1 / sqrt
+    // (from 1) per vector holds it there without a square root or a division.
+    a.forward *= 1.5 - 0.5 * a.forward.length_squared();
+    a.up -= a.forward * a.forward.dot(a.up);
+    a.up *= 1.5 - 0.5 * a.up.length_squared();
     a.pos += a.forward * step;
     let size = Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
     for k in 0..3 {
@@ -371,7 +450,11 @@ fn move_agent(a: &mut Agent, s: &Steering, sd: f32, step: f32, b: Boundary, res:
             }
             Boundary::Walls => {
                 if a.pos[k] < 0.0 || a.pos[k] >= size[k] {
-                    a.pos[k] = if a.pos[k] < 0.0 { -a.pos[k] } else { 2.0 * size[k] - a.pos[k] };
+                    a.pos[k] = if a.pos[k] < 0.0 {
+                        -a.pos[k]
+                    } else {
+                        2.0 * size[k] - a.pos[k]
+                    };
                     a.pos[k] = a.pos[k].clamp(0.0, size[k] - 1e-3);
                     a.forward[k] = -a.forward[k];
                     a.up[k] = -a.up[k];

@@ -57,13 +57,21 @@ impl Params {
     /// Checks every range, and that one step's deposits cannot overflow a voxel.
     pub fn validate(&self) -> Result<(), VolumeError> {
         if self.agents == 0 || self.agents > MAX_AGENTS {
-            return Err(VolumeError::param("agents", self.agents, format!("1..={MAX_AGENTS}")));
+            return Err(VolumeError::param(
+                "agents",
+                self.agents,
+                format!("1..={MAX_AGENTS}"),
+            ));
         }
         check_range("sensor angle", self.sensor_angle as f64, 0.0, 180.0)?;
         check_range("sensor distance", self.sensor_distance as f64, 0.0, 256.0)?;
         check_range("turn angle", self.turn_angle as f64, 0.0, 180.0)?;
         if !(self.step_size.is_finite() && self.step_size > 0.0 && self.step_size <= 32.0) {
-            return Err(VolumeError::param("step size", self.step_size, "(0, 32] voxels"));
+            return Err(VolumeError::param(
+                "step size",
+                self.step_size,
+                "(0, 32] voxels",
+            ));
         }
         if !(1..=65535).contains(&self.deposit) {
             return Err(VolumeError::param("deposit", self.deposit, "1..=65535"));

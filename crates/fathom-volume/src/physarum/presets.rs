@@ -82,16 +82,29 @@ pub const PRESETS: &[Preset] = &[
     },
 ];
 
-/// The preset called `name`, its agent count scaled to a grid of `res`; unknown names list
-/// the valid ones.
+/// The preset called `name`, its agent count scaled to a grid of `res` (and its deposit
+/// lowered if the agents would overflow a voxel); unknown names list the valid ones.
 pub fn find(name: &str, res: [u32; 3]) -> Result<Params, VolumeError> {
     let p = PRESETS.iter().find(|p| p.name == name).ok_or_else(|| {
         let names: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
-        VolumeError::Invalid(format!("unknown physarum preset `{name}` (valid presets: {})", names.join(", ")))
+        VolumeError::Invalid(format!(
+            "unknown physarum preset `{name}` (valid presets: {})",
+            names.join(", ")
+        ))
     })?;
     let voxels = res.iter().map(|&r| r as f64).product::<f64>();
     let agents = (p.params.agents as f64 * voxels / 256f64.powi(3))
         .round()
         .clamp(1.0, super::params::MAX_AGENTS as f64) as u32;
-    Ok(Params { agents, ..p.params.clone() })
+    // Big grids get many agents: keep one step's deposits within the overflow bound.
+    let deposit = p
+        .params
+        .deposit
+        .min((super::params::MAX_STEP_DEPOSIT / agents as u64) as u32)
+        .max(1);
+    Ok(Params {
+        agents,
+        deposit,
+        ..p.params.clone()
+    })
 }

@@ -11,7 +11,10 @@ fn small(agents: u32) -> Params {
 }
 
 fn run(threads: usize, p: &Params, res: [u32; 3], steps: u32) -> (Vec<u32>, Vec<Agent>) {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
     pool.install(|| {
         let mut s = Simulation::new(p.clone(), res, 77, 1 << 30).unwrap();
         for _ in 0..steps {
@@ -31,9 +34,18 @@ fn same_seed_is_bit_identical_on_1_and_2_threads() {
         let one = run(1, &p, [40, 32, 24], 15);
         let two = run(2, &p, [40, 32, 24], 15);
         assert!(one.0.iter().any(|&v| v > 0), "{name}: no trail");
-        assert!(one.0 == two.0, "{name}: trail grids differ between 1 and 2 threads");
-        assert!(one.1 == two.1, "{name}: agents differ between 1 and 2 threads");
-        assert!(one == run(3, &p, [40, 32, 24], 15), "{name}: 3 threads differ");
+        assert!(
+            one.0 == two.0,
+            "{name}: trail grids differ between 1 and 2 threads"
+        );
+        assert!(
+            one.1 == two.1,
+            "{name}: agents differ between 1 and 2 threads"
+        );
+        assert!(
+            one == run(3, &p, [40, 32, 24], 15),
+            "{name}: 3 threads differ"
+        );
     }
 }
 
@@ -59,7 +71,10 @@ fn deposits_are_counted_and_diffusion_conserves_them_before_decay() {
     s.step();
     let total: u64 = s.trail_counts().iter().map(|&v| v as u64).sum();
     let want = 5000 * p.deposit as u64;
-    assert!(total <= want && want - total < 32 * 32 * 32, "{total} vs {want}");
+    assert!(
+        total <= want && want - total < 32 * 32 * 32,
+        "{total} vs {want}"
+    );
 }
 
 #[test]
@@ -78,7 +93,11 @@ fn frames_stay_orthonormal_and_agents_stay_inside() {
         for a in s.agents() {
             assert!((a.forward.length() - 1.0).abs() < 1e-4 && (a.up.length() - 1.0).abs() < 1e-4);
             assert!(a.forward.dot(a.up).abs() < 1e-4);
-            assert!(a.pos.cmpge(Vec3::ZERO).all() && a.pos.cmplt(Vec3::new(24.0, 20.0, 16.0)).all(), "{b:?}: {:?}", a.pos);
+            assert!(
+                a.pos.cmpge(Vec3::ZERO).all() && a.pos.cmplt(Vec3::new(24.0, 20.0, 16.0)).all(),
+                "{b:?}: {:?}",
+                a.pos
+            );
         }
     }
 }
@@ -95,7 +114,7 @@ fn agents_turn_toward_the_strongest_sensor() {
         turn_cos: 30f32.to_radians().cos(),
         turn_sin: 30f32.to_radians().sin(),
         ring: RING.map(|a| (a.to_radians().cos(), a.to_radians().sin())),
-        roll: 0.0,
+        roll: Vec::new(),
     };
     for k in 0..3 {
         let mut a = Agent {
@@ -112,7 +131,11 @@ fn agents_turn_toward_the_strongest_sensor() {
         trail[cell_of(sensor, res) as usize] = 100;
         move_agent(&mut a, &steer, 6.0, 1.0, Boundary::Wrap, res, &trail);
         let want = Vec3::X * steer.turn_cos + ring * steer.turn_sin;
-        assert!((a.forward - want).length() < 1e-5, "sensor {k}: forward {} want {want}", a.forward);
+        assert!(
+            (a.forward - want).length() < 1e-5,
+            "sensor {k}: forward {} want {want}",
+            a.forward
+        );
         assert!(a.forward.dot(a.up).abs() < 1e-5);
     }
     // All zero: every sensor ties; over many agents all four choices occur.
@@ -124,31 +147,101 @@ fn agents_turn_toward_the_strongest_sensor() {
             up: Vec3::Y,
             rng: Stream::new(9, i, 0),
         };
-        move_agent(&mut a, &steer, 6.0, 1.0, Boundary::Wrap, res, &vec![0; 32 * 32 * 32]);
-        let k = if a.forward.dot(Vec3::X) > 0.999 { 0 } else if a.forward.y > 0.4 { 1 } else if a.forward.z > 0.0 { 2 } else { 3 };
+        move_agent(
+            &mut a,
+            &steer,
+            6.0,
+            1.0,
+            Boundary::Wrap,
+            res,
+            &vec![0; 32 * 32 * 32],
+        );
+        let k = if a.forward.dot(Vec3::X) > 0.999 {
+            0
+        } else if a.forward.y > 0.4 {
+            1
+        } else if a.forward.z > 0.0 {
+            2
+        } else {
+            3
+        };
         seen[k] = true;
     }
-    assert_eq!(seen, [true; 4], "ties are broken at random among all sensors");
+    assert_eq!(
+        seen, [true; 4],
+        "ties are broken at random among all sensors"
+    );
     let _ = p;
 }
 
 #[test]
 fn bad_parameters_and_sizes_are_refused() {
     let cases = [
-        (Params { agents: 0, ..small(1) }, "agents = 0 is out of range: 1..="),
-        (Params { sensor_angle: 200.0, ..small(1) }, "sensor angle = 200"),
-        (Params { step_size: 0.0, ..small(1) }, "step size = 0"),
-        (Params { decay: 1.5, ..small(1) }, "decay = 1.5 is out of range: [0, 1]"),
-        (Params { diffusion: f32::NAN, ..small(1) }, "diffusion = NaN"),
-        (Params { deposit: 60000, ..small(1 << 20) }, "1..=2048 with 1048576 agents"),
-        (Params { spawn: Spawn::Ball(3.0), ..small(1) }, "spawn radius = 3"),
+        (
+            Params {
+                agents: 0,
+                ..small(1)
+            },
+            "agents = 0 is out of range: 1..=",
+        ),
+        (
+            Params {
+                sensor_angle: 200.0,
+                ..small(1)
+            },
+            "sensor angle = 200",
+        ),
+        (
+            Params {
+                step_size: 0.0,
+                ..small(1)
+            },
+            "step size = 0",
+        ),
+        (
+            Params {
+                decay: 1.5,
+                ..small(1)
+            },
+            "decay = 1.5 is out of range: [0, 1]",
+        ),
+        (
+            Params {
+                diffusion: f32::NAN,
+                ..small(1)
+            },
+            "diffusion = NaN",
+        ),
+        (
+            Params {
+                deposit: 60000,
+                ..small(1 << 20)
+            },
+            "1..=2048 with 1048576 agents",
+        ),
+        (
+            Params {
+                spawn: Spawn::Ball(3.0),
+                ..small(1)
+            },
+            "spawn radius = 3",
+        ),
     ];
     for (p, want) in cases {
-        let e = Simulation::new(p, [16; 3], 1, 1 << 30).err().unwrap().to_string();
+        let e = Simulation::new(p, [16; 3], 1, 1 << 30)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(e.contains(want), "expected `{want}` in: {e}");
     }
-    let e = Simulation::new(small(10), [2048; 3], 1, 1 << 30).err().unwrap().to_string();
+    let e = Simulation::new(small(10), [2048; 3], 1, 1 << 30)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("memory limit"), "{e}");
     let e = presets::find("tendril", [8; 3]).err().unwrap().to_string();
-    assert!(e.contains("valid presets: tendrils, sheets, lattice, cage"), "{e}");
+    assert!(
+        e.contains("valid presets: tendrils, sheets, lattice, cage"),
+        "{e}"
+    );
 }

@@ -11,7 +11,9 @@ use glam::DVec3;
 fn noise(res: u32, seed: u64) -> DensityGrid {
     let mut r = Stream::new(seed, 0, 0);
     let n = (res * res * res) as usize;
-    let data = (0..n).map(|_| if r.f32() < 0.5 { 0.0 } else { r.f32() }).collect();
+    let data = (0..n)
+        .map(|_| if r.f32() < 0.5 { 0.0 } else { r.f32() })
+        .collect();
     Grid::from_data([res; 3], data, WorldBox::UNIT).unwrap()
 }
 
@@ -57,11 +59,21 @@ fn white_furnace_converges_to_the_environment() {
         };
         let s = scene(noise(8, 1), p, Environment::Constant(Vec3::splat(env)));
         let (f, st) = render(&s, &camera(eye), 12, 12, 128, 5).unwrap();
-        assert!(st.mean_path_length > 0.5, "g {g}: the rays should scatter ({})", st.mean_path_length);
+        assert!(
+            st.mean_path_length > 0.5,
+            "g {g}: the rays should scatter ({})",
+            st.mean_path_length
+        );
         let m = mean(&f);
-        assert!((m - env as f64).abs() < 0.01, "g {g} scale {scale}: image mean {m}, want {env}");
+        assert!(
+            (m - env as f64).abs() < 0.01,
+            "g {g} scale {scale}: image mean {m}, want {env}"
+        );
         for c in &f.colour {
-            assert!((c[0] - env).abs() < 0.3 && c[0] == c[2], "g {g} scale {scale}: pixel {c:?}");
+            assert!(
+                (c[0] - env).abs() < 0.3 && c[0] == c[2],
+                "g {g} scale {scale}: pixel {c:?}"
+            );
         }
     }
 }
@@ -91,9 +103,14 @@ fn single_scattering_of_the_sun_matches_the_closed_form() {
         fov: 1.0,
     };
     let (f, _) = render(&s, &cam, 3, 3, 20_000, 1).unwrap();
-    let want = 3.0 / (4.0 * std::f64::consts::PI) * (1.0 - (-sigma as f64).exp()) * (-0.5 * sigma as f64).exp();
+    let want = 3.0 / (4.0 * std::f64::consts::PI)
+        * (1.0 - (-sigma as f64).exp())
+        * (-0.5 * sigma as f64).exp();
     let got = f.colour[4][0] as f64;
-    assert!((got - want).abs() < 0.02 * want, "sun single scattering {got}, want {want}");
+    assert!(
+        (got - want).abs() < 0.02 * want,
+        "sun single scattering {got}, want {want}"
+    );
 }
 
 /// A purely absorbing, emitting cube: radiance (1 - exp(-sigma L)) L_e along a ray of length L.
@@ -120,7 +137,10 @@ fn emission_matches_the_closed_form() {
     for ch in 0..3 {
         let got = f.colour[4][ch];
         let want = k * le[ch];
-        assert!((got - want).abs() < 0.02 * want + 1e-4, "channel {ch}: {got}, want {want}");
+        assert!(
+            (got - want).abs() < 0.02 * want + 1e-4,
+            "channel {ch}: {got}, want {want}"
+        );
     }
 }
 
@@ -130,7 +150,8 @@ fn blocks(f: &Frame) -> Vec<f64> {
     let mut out = vec![0.0; ((f.width / b) * (f.height / b)) as usize];
     for y in 0..f.height {
         for x in 0..f.width {
-            out[((y / b) * (f.width / b) + x / b) as usize] += f.colour[f.index(x, y)][1] as f64 / (b * b) as f64;
+            out[((y / b) * (f.width / b) + x / b) as usize] +=
+                f.colour[f.index(x, y)][1] as f64 / (b * b) as f64;
         }
     }
     out
@@ -154,11 +175,19 @@ fn majorant_grid_and_global_majorant_give_the_same_image() {
             d != 1
         })
     };
-    let mut g = Grid::from_data([res; 3], vec![0.0; (res * res * res) as usize], WorldBox::UNIT).unwrap();
+    let mut g = Grid::from_data(
+        [res; 3],
+        vec![0.0; (res * res * res) as usize],
+        WorldBox::UNIT,
+    )
+    .unwrap();
     for z in 0..res {
         for y in 0..res {
             for x in 0..res {
-                let holes = [menger(x), menger(y), menger(z)].iter().filter(|v| !**v).count();
+                let holes = [menger(x), menger(y), menger(z)]
+                    .iter()
+                    .filter(|v| !**v)
+                    .count();
                 if holes < 2 {
                     let i = g.index(x, y, z);
                     g.data_mut()[i] = 1.0;
@@ -201,11 +230,21 @@ fn majorant_grid_and_global_majorant_give_the_same_image() {
     assert!(noise > 0.0);
     for (i, (b, m, lookups)) in images.iter().enumerate().skip(2) {
         let d = rms(b, &images[0].0);
-        assert!(d < 2.0 * noise, "mode {i}: block rms difference {d} vs seed noise {noise}");
-        assert!((m - images[0].1).abs() < 3.0 * noise / 8.0 + 1e-3, "mode {i}: mean {m} vs {}", images[0].1);
+        assert!(
+            d < 2.0 * noise,
+            "mode {i}: block rms difference {d} vs seed noise {noise}"
+        );
+        assert!(
+            (m - images[0].1).abs() < 3.0 * noise / 8.0 + 1e-3,
+            "mode {i}: mean {m} vs {}",
+            images[0].1
+        );
         if i < 4 {
             // 3-voxel blocks fit the sponge's holes; 9-voxel ones overlap solid everywhere.
-            assert!(*lookups < images[0].2, "mode {i} should look up less than the global majorant");
+            assert!(
+                *lookups < images[0].2,
+                "mode {i} should look up less than the global majorant"
+            );
         }
     }
 }
@@ -221,7 +260,10 @@ fn images_do_not_depend_on_threads_or_passes() {
     let s = scene(noise(10, 3), p, Environment::Constant(Vec3::ONE));
     let cam = camera(DVec3::new(0.3, 0.8, 2.2));
     let run = |threads: usize, passes: &[u32]| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| {
             let mut pr = Progressive::new(&s, &cam, 16, 12, 9).unwrap();
             for &n in passes {
@@ -238,7 +280,11 @@ fn images_do_not_depend_on_threads_or_passes() {
 
 #[test]
 fn bad_render_settings_are_refused() {
-    let s = scene(noise(4, 1), MediumParams::default(), Environment::Constant(Vec3::ONE));
+    let s = scene(
+        noise(4, 1),
+        MediumParams::default(),
+        Environment::Constant(Vec3::ONE),
+    );
     let cam = camera(DVec3::new(0.5, 0.5, 3.0));
     let e = render(&s, &cam, 8, 8, 0, 1).unwrap_err().to_string();
     assert!(e.contains("spp = 0") && e.contains("1..="), "{e}");
@@ -246,7 +292,17 @@ fn bad_render_settings_are_refused() {
     assert!(e.contains("size = 0x8"), "{e}");
     let mut bad = s.clone();
     bad.environment = Environment::Constant(Vec3::splat(f32::NAN));
-    assert!(render(&bad, &cam, 4, 4, 1, 1).unwrap_err().to_string().contains("environment"));
+    assert!(
+        render(&bad, &cam, 4, 4, 1, 1)
+            .unwrap_err()
+            .to_string()
+            .contains("environment")
+    );
     let cam = Camera { fov: 0.0, ..cam };
-    assert!(render(&s, &cam, 4, 4, 1, 1).unwrap_err().to_string().contains("fov"));
+    assert!(
+        render(&s, &cam, 4, 4, 1, 1)
+            .unwrap_err()
+            .to_string()
+            .contains("fov")
+    );
 }

@@ -21,8 +21,16 @@ fn layout_matches_mitsuba() {
     let b = to_bytes(&g);
     assert_eq!(b.len(), 48 + 96);
     assert_eq!(&b[..4], b"VOL\x03");
-    assert_eq!(&b[4..24], &[1, 0, 0, 0, 2, 0, 0, 0, 3, 0, 0, 0, 4, 0, 0, 0, 1, 0, 0, 0]);
-    assert_eq!(&b[24..48], &[0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0].map(f32::to_le_bytes).concat()[..]);
+    assert_eq!(
+        &b[4..24],
+        &[1, 0, 0, 0, 2, 0, 0, 0, 3, 0, 0, 0, 4, 0, 0, 0, 1, 0, 0, 0]
+    );
+    assert_eq!(
+        &b[24..48],
+        &[0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0]
+            .map(f32::to_le_bytes)
+            .concat()[..]
+    );
     assert_eq!(&b[48 + 4 * 7..48 + 4 * 8], &7.0f32.to_le_bytes());
 }
 
@@ -37,7 +45,11 @@ fn file_round_trip_is_exact_and_keeps_the_box() {
     let back = read(&p, LIMIT).unwrap();
     assert_eq!(back.grid.data(), g.data());
     assert_eq!(back.grid.res(), g.res());
-    assert_eq!(back.grid.bbox, WorldBox::UNIT, "a read grid spans the unit cube, like Mitsuba's");
+    assert_eq!(
+        back.grid.bbox,
+        WorldBox::UNIT,
+        "a read grid spans the unit cube, like Mitsuba's"
+    );
     assert_eq!(back.file_box().unwrap(), g.bbox);
     assert_eq!(std::fs::read(&p).unwrap(), to_bytes(&g));
 }
@@ -58,19 +70,52 @@ fn bad_files_give_clear_errors() {
     let good = to_bytes(&grid([2, 2, 2], vec![1.0; 8]));
     let cases: Vec<(Vec<u8>, &str)> = vec![
         (b"VOX\x03".to_vec(), "expected the bytes `VOL`"),
-        (patched(3, &[2]), "version 2 is not supported (supported versions: 3)"),
-        (patched(4, &2i32.to_le_bytes()), "encoding 2 is not supported"),
-        (patched(8, &0i32.to_le_bytes()), "x resolution 0 is out of range 1..=8192"),
+        (
+            patched(3, &[2]),
+            "version 2 is not supported (supported versions: 3)",
+        ),
+        (
+            patched(4, &2i32.to_le_bytes()),
+            "encoding 2 is not supported",
+        ),
+        (
+            patched(8, &0i32.to_le_bytes()),
+            "x resolution 0 is out of range 1..=8192",
+        ),
         (patched(12, &(-5i32).to_le_bytes()), "y resolution -5"),
         (patched(20, &3i32.to_le_bytes()), "3 channels"),
-        (patched(8, &[8192i32.to_le_bytes(); 3].concat()), "more than the memory limit"),
-        (good[..30].to_vec(), "truncated inside its header (expected the bounding box)"),
-        (good[..good.len() - 2].to_vec(), "truncated: it ends after 78 bytes, its header promises 80"),
-        ([good.clone(), vec![0; 3]].concat(), "3 unexpected bytes after the last voxel"),
-        (patched(48, &f32::NAN.to_le_bytes()), "voxel (0, 0, 0) holds NaN"),
-        (patched(52, &(-2.0f32).to_le_bytes()), "voxel (1, 0, 0) holds -2"),
-        (patched(76, &f32::INFINITY.to_le_bytes()), "voxel (1, 1, 1) holds inf"),
-        (vec![], "truncated inside its header (expected the magic bytes"),
+        (
+            patched(8, &[8192i32.to_le_bytes(); 3].concat()),
+            "more than the memory limit",
+        ),
+        (
+            good[..30].to_vec(),
+            "truncated inside its header (expected the bounding box)",
+        ),
+        (
+            good[..good.len() - 2].to_vec(),
+            "truncated: it ends after 78 bytes, its header promises 80",
+        ),
+        (
+            [good.clone(), vec![0; 3]].concat(),
+            "3 unexpected bytes after the last voxel",
+        ),
+        (
+            patched(48, &f32::NAN.to_le_bytes()),
+            "voxel (0, 0, 0) holds NaN",
+        ),
+        (
+            patched(52, &(-2.0f32).to_le_bytes()),
+            "voxel (1, 0, 0) holds -2",
+        ),
+        (
+            patched(76, &f32::INFINITY.to_le_bytes()),
+            "voxel (1, 1, 1) holds inf",
+        ),
+        (
+            vec![],
+            "truncated inside its header (expected the magic bytes",
+        ),
     ];
     for (bytes, want) in cases {
         let e = err(&bytes);
@@ -89,7 +134,10 @@ fn oversized_headers_are_refused_before_reading_the_voxels() {
     b[12..20].copy_from_slice(&[0, 32, 0, 0, 0, 32, 0, 0]);
     std::fs::write(&p, &b[..48]).unwrap();
     let e = read(&p, 4 << 30).unwrap_err().to_string();
-    assert!(e.contains("8192x8192x8192") && e.contains("memory limit"), "{e}");
+    assert!(
+        e.contains("8192x8192x8192") && e.contains("memory limit"),
+        "{e}"
+    );
     // Within the limit but the file is short: the length check comes before reading.
     b[8..20].copy_from_slice(&[0, 4, 0, 0, 0, 4, 0, 0, 0, 4, 0, 0]);
     std::fs::write(&p, &b[..48]).unwrap();
@@ -103,22 +151,32 @@ fn corpus_replays() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("vol-corpus");
     let expect = std::fs::read_to_string(dir.join("expect.txt")).unwrap();
     let mut n = 0;
-    for line in expect.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#')) {
+    for line in expect
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+    {
         let mut parts = line.splitn(3, ' ');
         let (file, outcome) = (parts.next().unwrap(), parts.next().unwrap());
         let got = read(&dir.join(file), LIMIT);
         match outcome {
             "ok" => {
                 let v = got.unwrap_or_else(|e| panic!("{file}: {e}"));
-                assert_eq!(to_bytes(&{
-                    let mut g = v.grid.clone();
-                    g.bbox = v.file_box().unwrap();
-                    g
-                }), std::fs::read(dir.join(file)).unwrap(), "{file} does not round-trip");
+                assert_eq!(
+                    to_bytes(&{
+                        let mut g = v.grid.clone();
+                        g.bbox = v.file_box().unwrap();
+                        g
+                    }),
+                    std::fs::read(dir.join(file)).unwrap(),
+                    "{file} does not round-trip"
+                );
             }
             "error" => {
                 let want = parts.next().unwrap_or("");
-                let e = got.err().unwrap_or_else(|| panic!("{file} should fail")).to_string();
+                let e = got
+                    .err()
+                    .unwrap_or_else(|| panic!("{file} should fail"))
+                    .to_string();
                 assert!(e.contains(want), "{file}: expected `{want}` in: {e}");
             }
             o => panic!("expect.txt: unknown outcome {o}"),
@@ -131,8 +189,15 @@ fn corpus_replays() {
 fn arb_grid() -> impl Strategy<Value = DensityGrid> {
     (1u32..6, 1u32..6, 1u32..6).prop_flat_map(|(x, y, z)| {
         let n = (x * y * z) as usize;
-        proptest::collection::vec(prop_oneof![Just(0.0f32), 0.0f32..1e6, any::<u32>().prop_map(|b| f32::from_bits(b & 0x7f7f_ffff))], n)
-            .prop_map(move |d| grid([x, y, z], d))
+        proptest::collection::vec(
+            prop_oneof![
+                Just(0.0f32),
+                0.0f32..1e6,
+                any::<u32>().prop_map(|b| f32::from_bits(b & 0x7f7f_ffff))
+            ],
+            n,
+        )
+        .prop_map(move |d| grid([x, y, z], d))
     })
 }
 
