@@ -1,9 +1,10 @@
-//! Code-built scenes for the zoom presets and the tests: the Menger sponge, the Mandelbox and a
-//! sphere. (The Mandelbulb comes from fathom-core's presets.)
+//! Code-built scenes for the zoom presets, benchmarks and tests of every crate: the Menger
+//! sponge spanning exactly `[-1, 1]^3`, the Mandelbox and a sphere. (The scene-file presets are
+//! in [`crate::presets`].)
 
-use fathom_core::fractals::Fractal;
-use fathom_core::primitives::Primitive;
-use fathom_core::scene::{Call, Material, Node, Scene};
+use crate::fractals::Fractal;
+use crate::primitives::Primitive;
+use crate::scene::{Call, Material, Node, Scene};
 use glam::DVec3;
 
 /// The Menger sponge spanning `[-1, 1]^3` (fathom-core's `Menger` estimator, a distance
@@ -37,7 +38,7 @@ pub fn sphere(r: f64) -> Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fathom_core::Tape;
+    use crate::Tape;
 
     #[test]
     fn menger_has_its_holes_and_corners() {
