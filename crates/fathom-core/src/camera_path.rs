@@ -91,7 +91,8 @@ impl CameraPath {
 
 /// A cube known to bound a scene exactly (its faces are the scene's faces), which an octree
 /// can take as its root instead of fitting one.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ExactCube {
     pub centre: DVec3,
     pub half: f64,

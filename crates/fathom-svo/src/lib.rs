@@ -20,6 +20,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod check;
+pub mod error;
 pub mod evict;
 pub mod explorer;
 pub mod generate;
@@ -31,6 +32,7 @@ pub mod root;
 pub mod stats;
 pub mod traverse;
 
+pub use error::OctreeError;
 pub use explorer::{Explorer, ExplorerConfig, FrameStats, SvoImage, Traversal};
 pub use octree::Octree;
 pub use root::{MENGER_CUBE, RootSpec};

@@ -74,13 +74,13 @@ impl RootSpec {
     }
 
     /// Checks that the spec is a finite cube with a positive side.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), crate::error::OctreeError> {
         let (c, h) = match *self {
             RootSpec::Fit { half } => (DVec3::ZERO, half),
             RootSpec::Cube { centre, half } => (centre, half),
         };
         if !(h.is_finite() && h > 0.0 && c.is_finite()) {
-            return Err("the root cube must be finite with a positive side".into());
+            return Err(crate::error::OctreeError::Root);
         }
         Ok(())
     }

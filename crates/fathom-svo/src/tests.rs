@@ -228,6 +228,7 @@ fn bad_settings_are_refused_with_clear_errors() {
         Explorer::new(&s, c.clone())
             .err()
             .unwrap()
+            .to_string()
             .contains("fidelity")
     );
     c.fidelity = 1.0;
@@ -236,11 +237,15 @@ fn bad_settings_are_refused_with_clear_errors() {
         Explorer::new(&s, c.clone())
             .err()
             .unwrap()
+            .to_string()
             .contains("max memory")
     );
     c.max_memory = 1 << 24;
     c.width = 0;
-    assert!(Explorer::new(&s, c).err().unwrap().contains("image size"));
+    assert!(matches!(
+        Explorer::new(&s, c).err().unwrap(),
+        crate::OctreeError::Size { .. }
+    ));
 }
 
 #[test]

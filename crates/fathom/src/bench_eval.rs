@@ -83,29 +83,6 @@ fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64) {
     (scalar, packet)
 }
 
-/// A 100-node tree mixing every primitive, several operators and every combine.
-pub fn hundred_node_scene() -> Scene {
-    let prims = Primitive::all();
-    let combines = Combine::all();
-    let mut root = Node::new(Primitive::Sphere);
-    for i in 0..9 {
-        let mut branch = Node::new(prims[(i * 7 + 1) % prims.len()])
-            .combine(combines[i % combines.len()])
-            .op(Call::new(Transform::Translate).with("offset", &[i as f64 * 0.3, 0.0, 0.0]));
-        for j in 0..10 {
-            let k = i * 10 + j;
-            branch = branch.child(
-                Node::new(prims[k % prims.len()])
-                    .combine(combines[k % combines.len()])
-                    .op(Call::new(Transform::Rotate).with("angle", &[k as f64]))
-                    .op(Call::new(Transform::Scale).with("factor", &[0.5])),
-            );
-        }
-        root = root.child(branch);
-    }
-    Scene::new(root)
-}
-
 pub fn run(a: EvalArgs) -> Result<(), String> {
     if !(a.seconds > 0.0 && a.seconds <= 60.0) {
         return Err(format!("--seconds = {} is out of range (0, 60]", a.seconds));
@@ -174,10 +151,4 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
 mod tests {
     use super::*;
 
-    #[test]
-    fn hundred_node_scene_has_a_hundred_nodes_and_compiles() {
-        let s = hundred_node_scene();
-        assert_eq!(s.root.count(), 100);
-        Tape::compile(&s).unwrap();
-    }
 }
