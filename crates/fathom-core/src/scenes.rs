@@ -61,7 +61,6 @@ pub fn hundred_node_scene() -> Scene {
     Scene::new(root)
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -133,10 +133,14 @@ pub(crate) struct GPx {
     pub misc: [u32; 4],
 }
 
-/// (field name, byte offset, byte size) of every field of the Rust mirrors of the WGSL
-/// structs, in declaration order, for the layout test.
+/// A Rust mirror of a WGSL struct: its name, size, and (name, byte offset, byte size) of every
+/// field in declaration order.
 #[cfg(test)]
-pub(crate) fn rust_layouts() -> Vec<(&'static str, usize, Vec<(&'static str, usize, usize)>)> {
+pub(crate) type Layout = (&'static str, usize, Vec<(&'static str, usize, usize)>);
+
+/// The layouts of the Rust mirrors of the WGSL structs, for the layout test.
+#[cfg(test)]
+pub(crate) fn rust_layouts() -> Vec<Layout> {
     macro_rules! layout {
         ($t:ty { $($f:ident: $ft:ty),* $(,)? }) => {
             (

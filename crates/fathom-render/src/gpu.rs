@@ -33,7 +33,16 @@ impl GpuBackend {
         &self.renderer
     }
 
-    fn upload(&mut self, tape: &Tape, generation: u64, counters: &mut Counters) -> Result<(), GpuError> {
+    pub fn into_renderer(self) -> Renderer {
+        self.renderer
+    }
+
+    fn upload(
+        &mut self,
+        tape: &Tape,
+        generation: u64,
+        counters: &mut Counters,
+    ) -> Result<(), GpuError> {
         if self.uploaded != Some(generation) {
             self.renderer.set_tape(tape)?;
             self.uploaded = Some(generation);
@@ -71,7 +80,11 @@ impl GpuBackend {
         let pixel_angle = projection.pixel_angle(&cam, opts.width, opts.height);
         let r = &scene.render;
         let params = PostParams {
-            ssao: if projection.screen_space() { req.ssao } else { 0.0 },
+            ssao: if projection.screen_space() {
+                req.ssao
+            } else {
+                0.0
+            },
             pixel_angle: pixel_angle as f32,
             fog: r.fog as f32,
             fog_colour: r.sky_bottom.map(|c| c as f32),

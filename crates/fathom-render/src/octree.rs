@@ -11,35 +11,13 @@ use crate::session::{Counters, Rendered, report_done};
 use crate::stats::{OctreeStats, Stats, Timings};
 use fathom_core::frame::{Frame, Rect};
 use fathom_core::{Camera, Scene};
-use fathom_svo::{Explorer, ExplorerConfig, FrameStats, OctreeError, RootSpec, SvoImage};
+use fathom_svo::{Explorer, ExplorerConfig, FrameStats, OctreeError, SvoImage};
 use fathom_trace::post::{self, PostParams};
 use std::time::Instant;
 
 pub(crate) struct OctreeBackend {
     pub explorer: Explorer,
     key: (u64, ExplorerConfig),
-}
-
-/// The explorer settings of a request.
-fn config(req: &RenderRequest) -> ExplorerConfig {
-    let o = &req.octree;
-    ExplorerConfig {
-        width: req.width * req.supersample,
-        height: req.height * req.supersample,
-        fidelity: o.fidelity,
-        threads: req
-            .threads
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get())),
-        max_memory: o.max_memory,
-        traversal: o.traversal,
-        subdivide_ms: o.subdivide_ms,
-        unify_every: o.unify_every,
-        root: match o.root {
-            Some(c) => RootSpec::from_cube(Some(c)),
-            None => RootSpec::Fit { half: 4.0 },
-        },
-        ..ExplorerConfig::default()
-    }
 }
 
 impl OctreeBackend {
@@ -52,7 +30,7 @@ impl OctreeBackend {
         req: &RenderRequest,
         counters: &mut Counters,
     ) -> Result<&'a mut OctreeBackend, OctreeError> {
-        let cfg = config(req);
+        let cfg = req.octree_config();
         let key = (generation, cfg.clone());
         if slot.as_ref().is_none_or(|o| o.key != key) {
             *slot = None;

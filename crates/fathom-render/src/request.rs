@@ -6,7 +6,7 @@
 use fathom_core::Projection;
 use fathom_core::camera_path::ExactCube;
 use fathom_core::frame::Rect;
-use fathom_svo::Traversal;
+use fathom_svo::{ExplorerConfig, OctreeError, RootSpec, Traversal};
 use fathom_trace::{Method, Options, OptionsError};
 use serde::{Deserialize, Serialize};
 
@@ -149,6 +149,8 @@ pub enum RequestError {
     OctreeGeometryOnly,
     #[error("octree settle_frames = {0} is out of range [0, 100000]")]
     SettleFrames(usize),
+    #[error(transparent)]
+    Octree(#[from] OctreeError),
 }
 
 impl RenderRequest {
@@ -196,8 +198,32 @@ impl RenderRequest {
             if self.octree.settle_frames > 100_000 {
                 return Err(RequestError::SettleFrames(self.octree.settle_frames));
             }
+            self.octree_config().validate()?;
         }
         Ok(())
+    }
+
+    /// The octree explorer's settings for this request (supersampled size; threads default to
+    /// the machine's cores; the root is the exact cube when given, else fitted in [-4, 4]^3).
+    pub fn octree_config(&self) -> ExplorerConfig {
+        let o = &self.octree;
+        ExplorerConfig {
+            width: self.width * self.supersample,
+            height: self.height * self.supersample,
+            fidelity: o.fidelity,
+            threads: self
+                .threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get())),
+            max_memory: o.max_memory,
+            traversal: o.traversal,
+            subdivide_ms: o.subdivide_ms,
+            unify_every: o.unify_every,
+            root: match o.root {
+                Some(c) => RootSpec::from_cube(Some(c)),
+                None => RootSpec::Fit { half: 4.0 },
+            },
+            ..ExplorerConfig::default()
+        }
     }
 
     /// Size of the output image (both eyes for stereo).
@@ -240,8 +266,14 @@ mod tests {
             f(&mut b);
             b.validate().unwrap_err()
         };
-        assert!(matches!(bad(&|b| b.threads = Some(0)), RequestError::Threads(0)));
-        assert!(matches!(bad(&|b| b.fog = Some(f64::NAN)), RequestError::Fog(_)));
+        assert!(matches!(
+            bad(&|b| b.threads = Some(0)),
+            RequestError::Threads(0)
+        ));
+        assert!(matches!(
+            bad(&|b| b.fog = Some(f64::NAN)),
+            RequestError::Fog(_)
+        ));
         assert!(matches!(
             bad(&|b| b.width = 0),
             RequestError::Options(OptionsError::Empty { .. })
@@ -254,7 +286,10 @@ mod tests {
                 height: 1,
             })
         });
-        assert!(e.to_string().contains("not inside the 1280x720 image"), "{e}");
+        assert!(
+            e.to_string().contains("not inside the 1280x720 image"),
+            "{e}"
+        );
         assert!(matches!(
             bad(&|b| {
                 b.backend = Backend::Octree;

@@ -149,6 +149,11 @@ impl Session {
         self.gpu = Some(GpuBackend::new(renderer));
     }
 
+    /// Takes the GPU renderer out of the session (to hand the device to another session).
+    pub fn take_gpu(&mut self) -> Option<fathom_gpu::Renderer> {
+        self.gpu.take().map(GpuBackend::into_renderer)
+    }
+
     /// The GPU renderer, if one is open.
     pub fn gpu(&self) -> Option<&fathom_gpu::Renderer> {
         self.gpu.as_ref().map(GpuBackend::renderer)
@@ -207,7 +212,8 @@ impl Session {
             }
             Backend::Octree => {
                 let key = self.shading_generation;
-                let ob = OctreeBackend::get(&mut self.octree, &scene, key, req, &mut self.counters)?;
+                let ob =
+                    OctreeBackend::get(&mut self.octree, &scene, key, req, &mut self.counters)?;
                 ob.render(&scene, camera, req, control)?
             }
         };

@@ -2,10 +2,10 @@
 //! nothing (CPU and GPU) and structure edits build no pipeline, a cancelled frame stops within
 //! the tiles already in flight and leaves the session as it was.
 
+use crate::RenderError;
 use crate::control::{CancelToken, Control, Progress};
 use crate::request::{Backend, RenderRequest};
 use crate::session::{SceneChange, Session};
-use crate::RenderError;
 use fathom_core::frame::Rect;
 use fathom_core::presets;
 use fathom_core::{Camera, Projection};
@@ -62,7 +62,10 @@ fn regions_equal_the_crop_of_the_whole_render_mono_and_side_by_side() {
                 ..request(52, 34)
             };
             let whole = s.render(&cam, &req).unwrap().frame;
-            assert!(whole.depth.iter().any(|d| d.is_finite()), "{name}: empty view");
+            assert!(
+                whole.depth.iter().any(|d| d.is_finite()),
+                "{name}: empty view"
+            );
             let (w, h) = req.output_size();
             for r in grid(w, h) {
                 req.region = Some(r);
@@ -158,7 +161,10 @@ fn on_the_gpu_a_parameter_edit_is_a_buffer_write_and_a_structure_edit_builds_no_
     assert_eq!(s.counters().compiles, 1);
     assert_eq!(s.counters().gpu_uploads, uploads + 1);
     assert_eq!(s.gpu().unwrap().objects_built(), built);
-    assert!(after.frame != first.frame, "the edit did not reach the frame");
+    assert!(
+        after.frame != first.frame,
+        "the edit did not reach the frame"
+    );
     // Nothing changed: nothing uploaded.
     s.render(&cam, &req).unwrap();
     assert_eq!(s.counters().gpu_uploads, uploads + 1);
@@ -190,7 +196,10 @@ fn gpu_regions_are_crops_of_the_whole_frame() {
     let (w, h) = req.output_size();
     for r in grid(w, h) {
         req.region = Some(r);
-        assert!(s.render(&cam, &req).unwrap().frame == whole.crop(r), "{r:?}");
+        assert!(
+            s.render(&cam, &req).unwrap().frame == whole.crop(r),
+            "{r:?}"
+        );
     }
 }
 
@@ -238,10 +247,14 @@ fn a_cancelled_frame_stops_within_the_tiles_in_flight_and_the_next_frame_is_whol
     // The session is usable and the next frame is exactly the uncancelled one.
     token.reset();
     let again = s
-        .render_with(&cam, &req, &Control {
-            cancel: Some(&token),
-            progress: None,
-        })
+        .render_with(
+            &cam,
+            &req,
+            &Control {
+                cancel: Some(&token),
+                progress: None,
+            },
+        )
         .unwrap();
     assert!(again.frame == reference.frame);
 }

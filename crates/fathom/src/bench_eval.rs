@@ -3,13 +3,8 @@
 //! and of a parameter-only update. Prints JSON.
 
 use clap::Args;
-use fathom_core::combine::Combine;
 use fathom_core::presets::PRESETS;
-use fathom_core::primitives::Primitive;
-use fathom_core::registry::Family;
-use fathom_core::scene::Call;
-use fathom_core::transforms::Transform;
-use fathom_core::{Evaluator, F32x8, Node, Real, Scene, Tape, V3};
+use fathom_core::{Evaluator, F32x8, Real, Scene, Tape, V3};
 use serde_json::json;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -88,14 +83,14 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         return Err(format!("--seconds = {} is out of range (0, 60]", a.seconds));
     }
     for name in &a.presets {
-        fathom_core::presets::find(name)?;
+        fathom_core::presets::find(name).map_err(|e| e.to_string())?;
     }
     let mut rows = Vec::new();
     for p in PRESETS
         .iter()
         .filter(|p| a.presets.is_empty() || a.presets.iter().any(|n| n == p.name))
     {
-        let scene = fathom_core::presets::load(p.name)?;
+        let scene = fathom_core::presets::load(p.name).map_err(|e| e.to_string())?;
         let tape = Tape::compile(&scene).map_err(|e| format!("{}: {e}", p.name))?;
         let pts = sample_points(&scene, 4096);
         let (scalar, packet) = eval_rates(&tape, &pts, a.seconds);
@@ -114,7 +109,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "packet_over_scalar": (packet / scalar * 100.0).round() / 100.0,
         }));
     }
-    let scene = hundred_node_scene();
+    let scene = fathom_core::scenes::hundred_node_scene();
     let nodes = scene.root.count();
     let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;
     let compile = 1e6
@@ -145,10 +140,4 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
     );
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
 }
