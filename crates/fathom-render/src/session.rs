@@ -18,6 +18,7 @@ use crate::request::{Backend, RenderRequest};
 use crate::stats::Stats;
 use fathom_core::frame::Frame;
 use fathom_core::scene::Scene;
+use fathom_core::tape::CompileError;
 use fathom_core::{Camera, Tape};
 use fathom_svo::FrameStats;
 use serde::Serialize;
@@ -116,21 +117,29 @@ impl Session {
         if scene == self.scene {
             return Ok(SceneChange::Unchanged);
         }
-        scene.validate()?;
         let old = &self.scene;
+        // Each branch validates the scene once (the tape's update and compile validate it).
         let change = if scene.root == old.root && scene.ifs == old.ifs {
+            scene.validate()?;
             if scene.lights == old.lights && scene.render == old.render {
                 SceneChange::Camera
             } else {
                 SceneChange::Settings
             }
-        } else if self.tape.update_params(&scene).is_ok() {
-            self.counters.param_updates += 1;
-            SceneChange::Params
         } else {
-            self.tape = Tape::compile(&scene)?;
-            self.counters.compiles += 1;
-            SceneChange::Recompiled
+            match self.tape.update_params(&scene) {
+                Ok(()) => {
+                    self.counters.param_updates += 1;
+                    SceneChange::Params
+                }
+                Err(CompileError::StructureChanged) => {
+                    self.tape = Tape::compile(&scene)?;
+                    self.counters.compiles += 1;
+                    SceneChange::Recompiled
+                }
+                Err(CompileError::Invalid(e)) => return Err(e.into()),
+                Err(e) => return Err(e.into()),
+            }
         };
         if matches!(change, SceneChange::Params | SceneChange::Recompiled) {
             self.tape_generation += 1;

@@ -123,6 +123,26 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             edited.root.shape.params[0] += 1e-9;
             black_box(t2.update_params(&edited).ok());
         });
+    // The same edits through the render session, as the window makes them: a parameter edit
+    // (re-bakes the parameter buffer) and a structure edit (alternating between two trees, so
+    // every call recompiles). Each call includes the copy of the scene handed to the session.
+    let mut session = fathom_render::Session::new(scene.clone()).map_err(|e| e.to_string())?;
+    let mut edited = scene.clone();
+    let set_params = 1e6
+        / rate(a.seconds, || {
+            edited.root.shape.params[0] += 1e-9;
+            black_box(session.set_scene(edited.clone()).ok());
+        });
+    let params_only = session.counters().compiles == 1;
+    let mut smaller = scene.clone();
+    smaller.root.children.pop();
+    let shapes = [scene.clone(), smaller];
+    let mut k = 0;
+    let set_structure = 1e6
+        / rate(a.seconds, || {
+            k += 1;
+            black_box(session.set_scene(shapes[k % 2].clone()).ok());
+        });
     let out = json!({
         "bench": "eval",
         "threads": 1,
@@ -133,6 +153,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "tape_len": tape.instrs().len(),
             "compile_us": (compile * 10.0).round() / 10.0,
             "update_params_us": (update * 10.0).round() / 10.0,
+            "session_set_scene_params_us": (set_params * 10.0).round() / 10.0,
+            "session_set_scene_params_compiled_nothing": params_only,
+            "session_set_scene_structure_us": (set_structure * 10.0).round() / 10.0,
         },
     });
     println!(
