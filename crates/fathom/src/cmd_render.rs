@@ -428,4 +428,41 @@ mod tests {
         assert_eq!(stats["primary_rays"], 24 * 16);
         std::fs::remove_dir_all(&dir).ok();
     }
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        r: RenderArgs,
+    }
+
+    #[test]
+    fn render_with_the_octree_writes_a_png_with_a_silhouette() {
+        let dir = std::env::temp_dir().join(format!("fathom-svo-still-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let out = dir.join("s.png");
+        let cli = <Cli as clap::Parser>::parse_from([
+            "t",
+            "--preset",
+            "mandelbulb",
+            "--renderer",
+            "svo",
+            "--size",
+            "64x48",
+            "--threads",
+            "1",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        run(cli.r).unwrap();
+        let img = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (64, 48));
+        let centre = img.get_pixel(32, 24).0;
+        let corner = img.get_pixel(0, 0).0;
+        assert_ne!(
+            centre, corner,
+            "the bulb should cover the centre, not the corner"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
