@@ -95,7 +95,9 @@ impl<'a> Progressive<'a> {
     ) -> Result<Self, VolumeError> {
         check_size(width, height)?;
         scene.validate()?;
-        camera.validate().map_err(VolumeError::Invalid)?;
+        camera
+            .validate()
+            .map_err(|e| VolumeError::Invalid(e.to_string()))?;
         Ok(Progressive {
             scene,
             frame: camera.frame(),

@@ -65,13 +65,14 @@ fn load_average() -> serde_json::Value {
 
 /// The benchmark's scene: the Menger preset's sponge sampled into `res`^3 over [-1, 1]^3.
 pub fn menger_density(res: u32) -> Result<fathom_volume::DensityGrid, String> {
-    let tape = Tape::compile(&presets::load("menger")?).map_err(|e| e.to_string())?;
+    let tape = Tape::compile(&presets::load("menger").map_err(|e| e.to_string())?)
+        .map_err(|e| e.to_string())?;
     let bbox = WorldBox::new(Vec3::splat(-1.0), Vec3::splat(1.0)).map_err(|e| e.to_string())?;
     fractal::sample(&tape, [res; 3], bbox, 0.0, 8 << 30, &|| {}).map_err(|e| e.to_string())
 }
 
 fn renders(a: &VolumeBenchArgs, w: u32, h: u32) -> Result<Vec<serde_json::Value>, String> {
-    let camera = presets::load("menger")?.camera;
+    let camera = presets::load("menger").map_err(|e| e.to_string())?.camera;
     let mut out = Vec::new();
     for res in a.grids.split(',') {
         let res: u32 = res
@@ -177,7 +178,7 @@ pub fn run(a: VolumeBenchArgs) -> Result<(), String> {
     if a.threads == 0 || a.threads > 1024 {
         return Err("--threads must be in [1, 1024]".into());
     }
-    let (w, h) = crate::cmd_zoom::parse_size(&a.size)?;
+    let (w, h) = crate::args::parse_size(&a.size)?;
     render::check_spp(a.spp).map_err(|e| e.to_string())?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads)

@@ -157,14 +157,14 @@ pub struct VolumeArgs {
     #[arg(long, default_value_t = 5)]
     pub rr_depth: u32,
     /// Camera position x,y,z (default: the scene's camera, or framing the grid).
-    #[arg(long, allow_hyphen_values = true)]
-    pub eye: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::args::parse_vec)]
+    pub eye: Option<DVec3>,
     /// Point the camera looks at x,y,z.
-    #[arg(long, allow_hyphen_values = true)]
-    pub target: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::args::parse_vec)]
+    pub target: Option<DVec3>,
     /// Camera up vector x,y,z.
-    #[arg(long, allow_hyphen_values = true)]
-    pub up: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::args::parse_vec)]
+    pub up: Option<DVec3>,
     /// Vertical field of view in degrees, (0, 179].
     #[arg(long)]
     pub fov: Option<f64>,
@@ -285,7 +285,7 @@ fn source(a: &VolumeArgs) -> Result<Source, String> {
     if a.scene.is_some() || a.preset.is_some() {
         let scene = match (&a.scene, &a.preset) {
             (Some(path), _) => scene_file::load(path).map_err(|e| e.to_string())?,
-            (None, Some(name)) => presets::load(name)?,
+            (None, Some(name)) => presets::load(name).map_err(|e| e.to_string())?,
             _ => unreachable!(),
         };
         let bbox = a.bbox.as_deref().map(parse_box).transpose()?;
@@ -361,9 +361,9 @@ fn bar(quiet: bool, len: u64, what: &str) -> ProgressBar {
 }
 
 pub fn run(a: VolumeArgs) -> Result<(), String> {
-    let (width, height) = crate::cmd_zoom::parse_size(&a.size)?;
+    let (width, height) = crate::args::parse_size(&a.size)?;
     render::check_spp(a.spp).map_err(|e| e.to_string())?;
-    let limit = crate::cmd_zoom::parse_bytes(&a.max_memory)? as u64;
+    let limit = crate::args::parse_bytes(&a.max_memory)? as u64;
     let src = source(&a)?;
     let params = medium_params(&a)?;
     params.validate().map_err(|e| e.to_string())?;
@@ -438,19 +438,14 @@ fn run_in_pool(
     }
     if let Some(out) = &output {
         let mut camera = built.camera.clone();
-        let dv = |name: &str, s: &Option<String>| -> Result<Option<DVec3>, String> {
-            s.as_deref()
-                .map(|s| vec3(name, s).map(|v| v.as_dvec3()))
-                .transpose()
-        };
-        if let Some(v) = dv("eye", &a.eye)? {
-            camera.eye = v;
-        }
-        if let Some(v) = dv("target", &a.target)? {
-            camera.target = v;
-        }
-        if let Some(v) = dv("up", &a.up)? {
-            camera.up = v;
+        for (field, v) in [
+            (&mut camera.eye, a.eye),
+            (&mut camera.target, a.target),
+            (&mut camera.up, a.up),
+        ] {
+            if let Some(v) = v {
+                *field = v;
+            }
         }
         if let Some(f) = a.fov {
             camera.fov = f;
@@ -480,8 +475,8 @@ fn run_in_pool(
         {
             pipeline::save_exr(&frame, out).map_err(|e| e.to_string())?;
         } else {
-            let f = fathom_trace::output::open_output(out)?;
-            fathom_trace::output::save_colour(&frame, f, out)?;
+            let f = fathom_trace::output::open_output(out).map_err(|e| e.to_string())?;
+            fathom_trace::output::save_colour(&frame, f, out).map_err(|e| e.to_string())?;
         }
         let st = prog.stats();
         if !a.quiet {
