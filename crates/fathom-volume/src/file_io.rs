@@ -109,6 +109,13 @@ impl Fields<'_> {
     }
 }
 
+/// Appends a box as six little-endian f32 (min xyz, max xyz), as both formats store it.
+pub fn push_box(h: &mut Vec<u8>, b: &crate::grid::WorldBox) {
+    for v in b.min.to_array().into_iter().chain(b.max.to_array()) {
+        h.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
 /// Voxels from little-endian 4-byte words.
 pub fn words<T>(bytes: &[u8], from: fn([u8; 4]) -> T) -> Vec<T> {
     bytes

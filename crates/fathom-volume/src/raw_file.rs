@@ -107,15 +107,7 @@ fn header<T: Copy + Default>(kind: u32, g: &Grid<T>) -> Vec<u8> {
     for r in g.res() {
         h.extend_from_slice(&r.to_le_bytes());
     }
-    for v in g
-        .bbox
-        .min
-        .to_array()
-        .into_iter()
-        .chain(g.bbox.max.to_array())
-    {
-        h.extend_from_slice(&v.to_le_bytes());
-    }
+    file_io::push_box(&mut h, &g.bbox);
     h
 }
 

@@ -145,15 +145,7 @@ fn header(grid: &DensityGrid) -> Vec<u8> {
         h.extend_from_slice(&(r as i32).to_le_bytes());
     }
     h.extend_from_slice(&1i32.to_le_bytes());
-    for v in grid
-        .bbox
-        .min
-        .to_array()
-        .into_iter()
-        .chain(grid.bbox.max.to_array())
-    {
-        h.extend_from_slice(&v.to_le_bytes());
-    }
+    file_io::push_box(&mut h, &grid.bbox);
     h
 }
 

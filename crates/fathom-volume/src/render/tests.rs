@@ -36,6 +36,16 @@ fn camera(eye: DVec3) -> Camera {
     }
 }
 
+/// A 1-degree camera looking down -z through the centre of the unit cube.
+fn narrow_camera() -> Camera {
+    Camera {
+        eye: DVec3::new(0.5, 0.5, 3.0),
+        target: DVec3::new(0.5, 0.5, 0.0),
+        up: DVec3::Y,
+        fov: 1.0,
+    }
+}
+
 fn mean(f: &Frame) -> f64 {
     f.colour.iter().map(|c| c[1] as f64).sum::<f64>() / f.len() as f64
 }
@@ -96,12 +106,7 @@ fn single_scattering_of_the_sun_matches_the_closed_form() {
         radiance: Vec3::splat(3.0),
     });
     s.max_depth = 1;
-    let cam = Camera {
-        eye: DVec3::new(0.5, 0.5, 3.0),
-        target: DVec3::new(0.5, 0.5, 0.0),
-        up: DVec3::Y,
-        fov: 1.0,
-    };
+    let cam = narrow_camera();
     let (f, _) = render(&s, &cam, 3, 3, 20_000, 1).unwrap();
     let want = 3.0 / (4.0 * std::f64::consts::PI)
         * (1.0 - (-sigma as f64).exp())
@@ -125,12 +130,7 @@ fn emission_matches_the_closed_form() {
         ..MediumParams::default()
     };
     let s = scene(grid, p, Environment::Constant(Vec3::ZERO));
-    let cam = Camera {
-        eye: DVec3::new(0.5, 0.5, 3.0),
-        target: DVec3::new(0.5, 0.5, 0.0),
-        up: DVec3::Y,
-        fov: 1.0,
-    };
+    let cam = narrow_camera();
     let (f, _) = render(&s, &cam, 3, 3, 20_000, 1).unwrap();
     let le = colour_map(1.0) * 2.0;
     let k = 1.0 - (-sigma).exp();
