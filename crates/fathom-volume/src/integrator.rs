@@ -46,12 +46,11 @@ impl VolumeScene {
                 format!("0..={MAX_DEPTH}"),
             ));
         }
+        let unit = |v: Vec3| (v.length() - 1.0).abs() < 1e-3;
         let ok = |v: Vec3| v.is_finite() && v.min_element() >= 0.0 && v.max_element() <= 1e6;
         let env_ok = match self.environment {
             Environment::Constant(c) => ok(c),
-            Environment::Sky { top, bottom, up } => {
-                ok(top) && ok(bottom) && (up.length() - 1.0).abs() < 1e-3
-            }
+            Environment::Sky { top, bottom, up } => ok(top) && ok(bottom) && unit(up),
         };
         if !env_ok {
             return Err(VolumeError::param(
@@ -60,14 +59,14 @@ impl VolumeScene {
                 "radiances in [0, 1e6] per channel",
             ));
         }
-        if let Some(s) = self.sun {
-            if !ok(s.radiance) || !((s.towards.length() - 1.0).abs() < 1e-3) {
-                return Err(VolumeError::param(
-                    "sun",
-                    format!("{s:?}"),
-                    "a unit direction and radiance in [0, 1e6] per channel",
-                ));
-            }
+        if let Some(s) = self.sun
+            && (!ok(s.radiance) || !unit(s.towards))
+        {
+            return Err(VolumeError::param(
+                "sun",
+                format!("{s:?}"),
+                "a unit direction and radiance in [0, 1e6] per channel",
+            ));
         }
         Ok(())
     }

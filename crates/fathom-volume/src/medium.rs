@@ -81,14 +81,14 @@ impl MediumParams {
         }
         HenyeyGreenstein::new(self.g)?;
         check_range("emission", self.emission as f64, 0.0, MAX_EMISSION)?;
-        if let Majorant::Grid { block } = self.majorant {
-            if !(1..=MAX_BLOCK).contains(&block) {
-                return Err(VolumeError::param(
-                    "majorant block",
-                    block,
-                    format!("1..={MAX_BLOCK} voxels"),
-                ));
-            }
+        if let Majorant::Grid { block } = self.majorant
+            && !(1..=MAX_BLOCK).contains(&block)
+        {
+            return Err(VolumeError::param(
+                "majorant block",
+                block,
+                format!("1..={MAX_BLOCK} voxels"),
+            ));
         }
         Ok(())
     }

@@ -105,7 +105,7 @@ mod tests {
             );
             let n = 200_000;
             let mut counts = vec![0u64; bins];
-            let mut az = vec![0u64; 16];
+            let mut az = [0u64; 16];
             let mut rng = Stream::new(42, g.to_bits() as u64, 0);
             let d = Vec3::new(0.3, -0.5, 0.8).normalize();
             let (t, b) = basis(d);

@@ -108,7 +108,7 @@ impl Simulation {
         let size = Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
         let agents: Vec<Agent> = (0..params.agents as u64)
             .into_par_iter()
-            .map(|i| spawn(&params, size, Stream::new(seed, i, 0x0a6e_17)))
+            .map(|i| spawn(&params, size, Stream::new(seed, i, 0x000a_6e17)))
             .collect();
         let cells = agents.iter().map(|a| cell_of(a.pos, res)).collect();
         Ok(Simulation {
@@ -146,7 +146,7 @@ impl Simulation {
     /// took.
     pub fn step(&mut self) -> StepTimes {
         let t0 = Instant::now();
-        if self.steps % RESORT_EVERY == 0 {
+        if self.steps.is_multiple_of(RESORT_EVERY) {
             self.sort_agents();
         }
         let ts = Instant::now();
