@@ -9,6 +9,7 @@ use std::process::ExitCode;
 mod bench;
 mod bench_eval;
 mod bench_gpu;
+mod bench_micro;
 mod bench_svo;
 mod bench_trace;
 mod cmd_list;

@@ -79,8 +79,8 @@ pub fn scan(text: &str, origin: &str) -> Result<Counts, MeshError> {
                     4 => {}
                     5 => {
                         let w = floats(4, 1, "the weight w")?[0];
-                        if w == 0.0 {
-                            return Err(at(words[4].0, "the weight w of a vertex must not be 0".into()));
+                        if w == 0.0 || !w.is_finite() {
+                            return Err(at(words[4].0, "the weight w of a vertex must be a finite number other than 0".into()));
                         }
                     }
                     7 => {
