@@ -133,15 +133,20 @@ impl Request {
                 let mut pts = ifs.points(self.cloud_points, self.cloud_seed)?;
                 chaos::fit_to_cell(&mut pts, cell);
                 let cloud = Cloud::new(&pts, self.cloud_radius, cell, 48)?;
+                // --bake gives the seed's approach: the cloud's exact distances on a grid.
+                let (field, how) = match self.bake {
+                    Some(n) => (Field::Grid(Grid::bake_with(cell, n, |_, q| (cloud.exact(q), 0))?), format!(" baked at {n}^3")),
+                    None => (Field::Cloud(cloud), String::new()),
+                };
                 Texture {
-                    field: Field::Cloud(cloud),
+                    field,
                     materials: vec![Material {
                         albedo: if name == "fern" { [0.25, 0.6, 0.2] } else { [0.55, 0.45, 0.3] },
                         specular: 0.2,
                         shininess: 24.0,
                         trap_colour: 0.0,
                     }],
-                    origin: format!("<cloud:{name}>"),
+                    origin: format!("<cloud:{name}>{how}"),
                 }
             }
             _ => {
