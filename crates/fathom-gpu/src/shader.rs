@@ -173,12 +173,13 @@ pub fn dispatch() -> String {
     s
 }
 
-/// The tape interpreter as a library for other shaders: the common declarations (the tape's
-/// instruction and parameter buffers at `@group(0) @binding(0)` and `@binding(1)`), every
-/// family, the generated dispatch and `eval_tape` / `eval_distance`, without this crate's own
-/// entry points and bindings. fathom-micro's fragment shader is written on top of it.
+/// The tape interpreter as a library for other shaders: the constants shared with Rust, the
+/// common declarations (the tape's instruction and parameter buffers at `@group(0)
+/// @binding(0)` and `@binding(1)`), every family, the generated dispatch and `eval_tape` /
+/// `eval_distance`, without this crate's own entry points and bindings. fathom-micro's
+/// fragment shader is written on top of it.
 pub fn interpreter_source() -> String {
-    let mut s = String::new();
+    let mut s = fathom_core::shared::wgsl_declarations();
     for part in [COMMON, PRIMITIVES_WGSL, FRACTALS_WGSL, TRANSFORMS_WGSL] {
         s += part;
         s += "\n";

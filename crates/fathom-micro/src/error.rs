@@ -69,8 +69,8 @@ pub enum MicroError {
     #[error("{0}")]
     Size(String),
     /// The camera cannot form an image.
-    #[error("camera: {0}")]
-    Camera(String),
+    #[error(transparent)]
+    Camera(#[from] fathom_core::camera::CameraError),
     /// The GPU path failed.
     #[error(transparent)]
     Gpu(#[from] fathom_gpu::GpuError),

@@ -235,21 +235,6 @@ impl Request {
     }
 }
 
-/// Parses `WIDTHxHEIGHT`.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size `{s}` should look like 1280x720"))?;
-    let p = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|&n| (1..=crate::limits::MAX_SIDE).contains(&n))
-            .ok_or_else(|| format!("size `{s}`: `{v}` is not a whole number in [1, {}]", crate::limits::MAX_SIDE))
-    };
-    Ok((p(w)?, p(h)?))
-}
-
 /// Parses `n` comma-separated finite numbers.
 pub fn parse_numbers(s: &str, n: usize) -> Result<Vec<f64>, String> {
     let v: Vec<f64> = s
@@ -261,11 +246,6 @@ pub fn parse_numbers(s: &str, n: usize) -> Result<Vec<f64>, String> {
         return Err(format!("`{s}` should be {n} comma-separated finite numbers"));
     }
     Ok(v)
-}
-
-/// Parses `x,y,z`.
-pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
-    parse_numbers(s, 3).map(|v| DVec3::new(v[0], v[1], v[2]))
 }
 
 /// Parses a cell `x0,y0,z0,x1,y1,z1`.

@@ -14,7 +14,7 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct MicroBenchArgs {
     /// Image size WIDTHxHEIGHT.
-    #[arg(long, default_value = "1280x720", value_parser = fathom_micro::request::parse_size)]
+    #[arg(long, default_value = "1280x720", value_parser = crate::args::parse_size)]
     pub size: (u32, u32),
     /// Timed frames per demo and renderer (after one untimed warm-up frame).
     #[arg(long, default_value_t = 1)]

@@ -82,16 +82,16 @@ pub struct MicroArgs {
     #[arg(short, long, default_value = "micro.png")]
     pub output: PathBuf,
     /// Image size WIDTHxHEIGHT.
-    #[arg(long, default_value = "1280x720", value_parser = request::parse_size)]
+    #[arg(long, default_value = "1280x720", value_parser = crate::args::parse_size)]
     pub size: (u32, u32),
     /// Camera position x,y,z (default: fitted to the mesh).
-    #[arg(long, value_parser = request::parse_vec3, allow_hyphen_values = true)]
+    #[arg(long, value_parser = crate::args::parse_vec, allow_hyphen_values = true)]
     pub eye: Option<DVec3>,
     /// Point the camera looks at x,y,z.
-    #[arg(long, value_parser = request::parse_vec3, allow_hyphen_values = true)]
+    #[arg(long, value_parser = crate::args::parse_vec, allow_hyphen_values = true)]
     pub target: Option<DVec3>,
     /// Camera up vector x,y,z.
-    #[arg(long, value_parser = request::parse_vec3, allow_hyphen_values = true)]
+    #[arg(long, value_parser = crate::args::parse_vec, allow_hyphen_values = true)]
     pub up: Option<DVec3>,
     /// Vertical field of view in degrees.
     #[arg(long)]
@@ -157,12 +157,14 @@ fn stats_json(s: &MicroStats, extra: serde_json::Value) -> serde_json::Value {
 }
 
 fn open(p: &Option<PathBuf>) -> Result<Option<(std::fs::File, &Path)>, String> {
-    p.as_deref().map(|p| output::open_output(p).map(|f| (f, p))).transpose()
+    p.as_deref()
+        .map(|p| output::open_output(p).map(|f| (f, p)).map_err(|e| e.to_string()))
+        .transpose()
 }
 
 pub fn run(a: MicroArgs) -> Result<(), String> {
     // Unwritable outputs fail before any work.
-    let out = output::open_output(&a.output)?;
+    let out = output::open_output(&a.output).map_err(|e| e.to_string())?;
     let (mask, steps, stats_file) = (open(&a.mask)?, open(&a.steps)?, open(&a.stats)?);
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(t) = a.threads {
@@ -228,12 +230,12 @@ pub fn run(a: MicroArgs) -> Result<(), String> {
     bar.finish_and_clear();
     let mut frame = frame;
     fathom_trace::post::sanitize(&mut frame);
-    output::save_colour(&frame, out, &a.output)?;
+    output::save_colour(&frame, out, &a.output).map_err(|e| e.to_string())?;
     if let Some((f, p)) = mask {
-        output::save_mask(&frame, f, p)?;
+        output::save_mask(&frame, f, p).map_err(|e| e.to_string())?;
     }
     if let Some((f, p)) = steps {
-        output::save_steps(&frame, f, p)?;
+        output::save_steps(&frame, f, p).map_err(|e| e.to_string())?;
     }
     if let Some((f, p)) = stats_file {
         let j = stats_json(&stats, extra);
