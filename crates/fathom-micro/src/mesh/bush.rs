@@ -23,15 +23,15 @@ fn coord(i: usize, n: usize) -> f64 {
 /// The lobed radius in unit direction `d`.
 fn radius(d: DVec3) -> f64 {
     let lobes = [
-        (DVec3::new(0.6, 0.7, 0.2), 0.30),
-        (DVec3::new(-0.7, 0.5, 0.4), 0.25),
-        (DVec3::new(0.1, 0.6, -0.8), 0.28),
-        (DVec3::new(-0.2, 1.0, -0.1), 0.22),
-        (DVec3::new(0.8, 0.1, -0.6), 0.18),
+        (DVec3::new(0.6, 0.7, 0.2), 0.42),
+        (DVec3::new(-0.7, 0.5, 0.4), 0.36),
+        (DVec3::new(0.1, 0.6, -0.8), 0.40),
+        (DVec3::new(-0.2, 1.0, -0.1), 0.30),
+        (DVec3::new(0.8, 0.1, -0.6), 0.28),
     ];
     1.0 + lobes
         .iter()
-        .map(|&(c, a)| a * d.dot(c.normalize()).max(0.0).powi(3))
+        .map(|&(c, a)| a * d.dot(c.normalize()).max(0.0).powi(4))
         .sum::<f64>()
 }
 
