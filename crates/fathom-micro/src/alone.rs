@@ -6,8 +6,8 @@ use crate::error::MicroError;
 use crate::render::{MicroStats, RenderOptions};
 use crate::shade::Lighting;
 use crate::texture::{Cell, Texture};
-use fathom_core::frame::{Frame, NO_ID};
 use fathom_core::Evaluator;
+use fathom_core::frame::{Frame, NO_ID};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -56,7 +56,14 @@ pub fn render(
                             let n = tex.normal(ev, q, 0.5 * pa * t);
                             let id = tex.material_id(ev, q);
                             let c = lighting.shade(&tex.materials[id as usize], n, d);
-                            return (c.as_vec3().to_array(), t as f32, n.as_vec3().to_array(), id, steps, 5);
+                            return (
+                                c.as_vec3().to_array(),
+                                t as f32,
+                                n.as_vec3().to_array(),
+                                id,
+                                steps,
+                                5,
+                            );
                         }
                         t += dist;
                     }
@@ -72,7 +79,8 @@ pub fn render(
         ..Default::default()
     };
     for (i, px) in rows.into_iter().flatten().enumerate() {
-        (f.colour[i], f.depth[i], f.normal[i], f.id[i], f.steps[i]) = (px.0, px.1, px.2, px.3, px.4);
+        (f.colour[i], f.depth[i], f.normal[i], f.id[i], f.steps[i]) =
+            (px.0, px.1, px.2, px.3, px.4);
         s.de_march += px.4 as u64;
         s.de_shade += px.5;
         if px.1.is_finite() {

@@ -58,7 +58,11 @@ fn lerp_call<K: Family + PartialEq + std::fmt::Debug>(
     for spec in a.kind.def().params {
         for _ in 0..spec.kind.width() {
             let v = a.params[slot] + (b.params[slot] - a.params[slot]) * w;
-            out.params[slot] = if spec.kind == ParamKind::Int { v.round() } else { v };
+            out.params[slot] = if spec.kind == ParamKind::Int {
+                v.round()
+            } else {
+                v
+            };
             slot += 1;
         }
     }
@@ -111,7 +115,8 @@ pub fn blend(a: &Scene, b: &Scene, w: f64) -> Result<Scene, KeyframeError> {
         (None, None) => {}
         (Some(x), Some(y)) if x.ops.len() == y.ops.len() => {
             let mut ifs = x.clone();
-            ifs.iterations = (x.iterations as f64 + (y.iterations as f64 - x.iterations as f64) * w).round() as u32;
+            ifs.iterations = (x.iterations as f64 + (y.iterations as f64 - x.iterations as f64) * w)
+                .round() as u32;
             for (i, (o, (p, q))) in ifs.ops.iter_mut().zip(x.ops.iter().zip(&y.ops)).enumerate() {
                 *o = lerp_call(p, q, w, &format!("ifs.ops[{i}]"))?;
             }

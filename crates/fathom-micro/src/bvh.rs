@@ -37,8 +37,16 @@ impl ShellBvh {
             .tets
             .iter()
             .map(|t| {
-                let (a, b) = t.verts.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), &p| (a.min(p), b.max(p)));
-                Bounded(Aabb::new(v3a(a) - Vec3A::splat(pad), v3a(b) + Vec3A::splat(pad)))
+                let (a, b) = t
+                    .verts
+                    .iter()
+                    .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), &p| {
+                        (a.min(p), b.max(p))
+                    });
+                Bounded(Aabb::new(
+                    v3a(a) - Vec3A::splat(pad),
+                    v3a(b) + Vec3A::splat(pad),
+                ))
             })
             .collect();
         let bvh = obvhs::bvh2::builder::build_bvh2(

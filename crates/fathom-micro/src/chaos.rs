@@ -67,7 +67,10 @@ impl Ifs {
             "tree" => Ok(Ifs::tree()),
             _ => Err(MicroError::Texture {
                 origin: name.into(),
-                msg: format!("unknown chaos-game system; expected one of: {}", SYSTEMS.join(", ")),
+                msg: format!(
+                    "unknown chaos-game system; expected one of: {}",
+                    SYSTEMS.join(", ")
+                ),
             }),
         }
     }
@@ -79,14 +82,26 @@ impl Ifs {
         Ifs {
             name: "fern",
             maps: vec![
-                Map { linear: rows([[0.0, 0.0, 0.0], [0.0, 0.16, 0.0], [0.0, 0.0, 0.0]]), offset: DVec3::ZERO, probability: 0.01 },
+                Map {
+                    linear: rows([[0.0, 0.0, 0.0], [0.0, 0.16, 0.0], [0.0, 0.0, 0.0]]),
+                    offset: DVec3::ZERO,
+                    probability: 0.01,
+                },
                 Map {
                     linear: curl * rows([[0.85, 0.04, 0.0], [-0.04, 0.85, 0.0], [0.0, 0.0, 0.85]]),
                     offset: DVec3::new(0.0, 1.6, 0.0),
                     probability: 0.85,
                 },
-                Map { linear: rows([[0.2, -0.26, 0.0], [0.23, 0.22, 0.0], [0.25, 0.0, 0.24]]), offset: DVec3::new(0.0, 1.6, 0.0), probability: 0.07 },
-                Map { linear: rows([[-0.15, 0.28, 0.0], [0.26, 0.24, 0.0], [-0.25, 0.0, 0.24]]), offset: DVec3::new(0.0, 0.44, 0.0), probability: 0.07 },
+                Map {
+                    linear: rows([[0.2, -0.26, 0.0], [0.23, 0.22, 0.0], [0.25, 0.0, 0.24]]),
+                    offset: DVec3::new(0.0, 1.6, 0.0),
+                    probability: 0.07,
+                },
+                Map {
+                    linear: rows([[-0.15, 0.28, 0.0], [0.26, 0.24, 0.0], [-0.25, 0.0, 0.24]]),
+                    offset: DVec3::new(0.0, 0.44, 0.0),
+                    probability: 0.07,
+                },
             ],
             shear: rows([[1.0, 0.08, 0.0], [0.0, 1.0, 0.0], [0.0, 0.05, 1.0]]),
             noise: 0.0015,
@@ -120,7 +135,13 @@ impl Ifs {
 
     /// Runs the chaos game for `n` points (after 32 discarded ones) from `seed`.
     pub fn points(&self, n: u64, seed: u64) -> Result<Vec<DVec3>, MicroError> {
-        check_range("cloud points", n as f64, 1.0, limits::MAX_CLOUD_POINTS as f64, "[1, 16777216]")?;
+        check_range(
+            "cloud points",
+            n as f64,
+            1.0,
+            limits::MAX_CLOUD_POINTS as f64,
+            "[1, 16777216]",
+        )?;
         let total: f64 = self.maps.iter().map(|m| m.probability).sum();
         if !(total > 0.0 && total.is_finite()) || self.maps.iter().any(|m| m.probability < 0.0) {
             return Err(MicroError::Texture {
@@ -159,7 +180,10 @@ impl Ifs {
 }
 
 fn bounds(p: &[DVec3]) -> (DVec3, DVec3) {
-    p.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)))
+    p.iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), &q| {
+            (a.min(q), b.max(q))
+        })
 }
 
 /// Scales and moves `points` uniformly so they stand in `cell`: centred across, base on the
@@ -170,10 +194,18 @@ pub fn fit_to_cell(points: &mut [DVec3], cell: Cell) {
     let room = cell.size() * 0.95;
     let s = (room / ext).min_element();
     let centre = 0.5 * (lo + hi);
-    let target = DVec3::new(0.5 * (cell.min.x + cell.max.x), cell.min.y, 0.5 * (cell.min.z + cell.max.z));
+    let target = DVec3::new(
+        0.5 * (cell.min.x + cell.max.x),
+        cell.min.y,
+        0.5 * (cell.min.z + cell.max.z),
+    );
     for p in points.iter_mut() {
         let q = (*p - centre) * s;
-        *p = DVec3::new(target.x + q.x, cell.min.y + (p.y - lo.y) * s, target.z + q.z);
+        *p = DVec3::new(
+            target.x + q.x,
+            cell.min.y + (p.y - lo.y) * s,
+            target.z + q.z,
+        );
     }
 }
 
@@ -189,13 +221,28 @@ pub struct Cloud {
 
 impl Cloud {
     /// Indexes `points`; `coarse_n` samples per axis of `cell` for the far-field bound.
-    pub fn new(points: &[DVec3], radius: f64, cell: Cell, coarse_n: u32) -> Result<Cloud, MicroError> {
-        check_range("cloud radius", radius, 1e-9, 1e3, "[1e-9, 1000] texture units")?;
-        let pts: Vec<[f32; 3]> = points.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
-        let tree = ImmutableKdTree::<f32, 3>::new_from_slice(&pts).map_err(|e| MicroError::Texture {
-            origin: "point cloud".into(),
-            msg: format!("cannot index the points: {e:?}"),
-        })?;
+    pub fn new(
+        points: &[DVec3],
+        radius: f64,
+        cell: Cell,
+        coarse_n: u32,
+    ) -> Result<Cloud, MicroError> {
+        check_range(
+            "cloud radius",
+            radius,
+            1e-9,
+            1e3,
+            "[1e-9, 1000] texture units",
+        )?;
+        let pts: Vec<[f32; 3]> = points
+            .iter()
+            .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+            .collect();
+        let tree =
+            ImmutableKdTree::<f32, 3>::new_from_slice(&pts).map_err(|e| MicroError::Texture {
+                origin: "point cloud".into(),
+                msg: format!("cannot index the points: {e:?}"),
+            })?;
         let exact = |q: DVec3| nearest(&tree, q) - radius;
         let coarse = Grid::bake_with(cell, coarse_n, |_, q| (exact(q), 0))?;
         let near = 1.5 * coarse.cell.size().max_element() / (coarse_n - 1) as f64;
@@ -216,7 +263,11 @@ impl Cloud {
     /// A distance bound: the coarse grid's lower bound where it is large, else exact.
     pub fn distance(&self, q: DVec3) -> f64 {
         let lower = self.coarse.nearest_node_bound(q);
-        if lower > self.near { lower } else { self.exact(q) }
+        if lower > self.near {
+            lower
+        } else {
+            self.exact(q)
+        }
     }
 }
 
@@ -239,11 +290,25 @@ mod tests {
             assert_eq!(a, ifs.points(5000, 7).unwrap());
             assert_ne!(a, ifs.points(5000, 8).unwrap());
             let (lo, hi) = bounds(&a);
-            assert!((hi - lo).max_element() < 20.0 && a.iter().all(|p| p.is_finite()), "{}", ifs.name);
+            assert!(
+                (hi - lo).max_element() < 20.0 && a.iter().all(|p| p.is_finite()),
+                "{}",
+                ifs.name
+            );
             // Not flat: the shear and the 3D maps give depth.
-            assert!((hi - lo).min_element() > 0.05 * (hi - lo).max_element(), "{}: {:?}", ifs.name, hi - lo);
+            assert!(
+                (hi - lo).min_element() > 0.05 * (hi - lo).max_element(),
+                "{}: {:?}",
+                ifs.name,
+                hi - lo
+            );
         }
-        assert!(Ifs::named("elm").unwrap_err().to_string().contains("fern, tree"));
+        assert!(
+            Ifs::named("elm")
+                .unwrap_err()
+                .to_string()
+                .contains("fern, tree")
+        );
         assert!(Ifs::fern().points(0, 1).is_err());
     }
 
@@ -257,12 +322,22 @@ mod tests {
         let mut rng = Rng(11);
         for _ in 0..300 {
             let q = DVec3::new(rng.unit(), rng.unit(), rng.unit()) * 2.0 - 1.0;
-            let brute = pts.iter().map(|p| (*p - q).length()).fold(f64::MAX, f64::min) - 0.01;
+            let brute = pts
+                .iter()
+                .map(|p| (*p - q).length())
+                .fold(f64::MAX, f64::min)
+                - 0.01;
             // f32 coordinates in the tree.
             assert!((cloud.exact(q) - brute).abs() < 1e-5, "{q:?}");
             let d = cloud.distance(q);
-            assert!(d <= brute + 1e-5, "the bound exceeds the distance at {q:?}: {d} > {brute}");
-            assert!(d > brute - 0.2, "the bound is useless at {q:?}: {d} vs {brute}");
+            assert!(
+                d <= brute + 1e-5,
+                "the bound exceeds the distance at {q:?}: {d} > {brute}"
+            );
+            assert!(
+                d > brute - 0.2,
+                "the bound is useless at {q:?}: {d} vs {brute}"
+            );
         }
     }
 }

@@ -24,20 +24,50 @@ pub struct Demo {
 }
 
 /// (name, mesh, texture file text, shell height, tiles per UV unit, view direction, base colour)
-type Spec = (&'static str, &'static str, &'static str, f64, f64, [f64; 3], [f64; 3]);
+type Spec = (
+    &'static str,
+    &'static str,
+    &'static str,
+    f64,
+    f64,
+    [f64; 3],
+    [f64; 3],
+);
 
 /// Every demo.
 pub const DEMOS: &[Spec] = &[
-    ("teapot", "teapot", include_str!("../demos/teapot-sponge.ron"), 0.06, 1.0, [1.0, 0.75, 1.7], [0.45, 0.38, 0.32]),
-    ("bush", "bush", include_str!("../demos/bush-leaves.ron"), 0.12, 1.0, [0.9, 0.55, 1.5], [0.18, 0.14, 0.08]),
+    (
+        "teapot",
+        "teapot",
+        include_str!("../demos/teapot-sponge.ron"),
+        0.06,
+        1.0,
+        [1.0, 0.75, 1.7],
+        [0.45, 0.38, 0.32],
+    ),
+    (
+        "bush",
+        "bush",
+        include_str!("../demos/bush-leaves.ron"),
+        0.12,
+        1.0,
+        [0.9, 0.55, 1.5],
+        [0.18, 0.14, 0.08],
+    ),
 ];
 
 /// The demo called `name`; unknown names list the valid ones.
 pub fn load(name: &str) -> Result<Demo, MicroError> {
-    let spec = DEMOS.iter().find(|d| d.0 == name).ok_or_else(|| MicroError::Texture {
-        origin: name.into(),
-        msg: format!("no such demo; expected one of: {}", DEMOS.iter().map(|d| d.0).collect::<Vec<_>>().join(", ")),
-    })?;
+    let spec = DEMOS
+        .iter()
+        .find(|d| d.0 == name)
+        .ok_or_else(|| MicroError::Texture {
+            origin: name.into(),
+            msg: format!(
+                "no such demo; expected one of: {}",
+                DEMOS.iter().map(|d| d.0).collect::<Vec<_>>().join(", ")
+            ),
+        })?;
     let (mesh, mesh_report) = mesh::load(spec.1, None)?;
     let origin = format!("<demo:{}>", spec.0);
     let texture = scene_file::parse(spec.2, &origin).map_err(|e| MicroError::Texture {

@@ -36,14 +36,18 @@ pub enum MeshError {
     #[error("{origin}: {msg}")]
     Invalid { origin: String, msg: String },
     /// The extension names no format we read.
-    #[error("{origin}: unknown mesh format `{ext}`; expected one of: obj, gltf, glb (or a built-in mesh: {builtins})")]
+    #[error(
+        "{origin}: unknown mesh format `{ext}`; expected one of: obj, gltf, glb (or a built-in mesh: {builtins})"
+    )]
     UnknownFormat {
         origin: String,
         ext: String,
         builtins: String,
     },
     /// The mesh has no texture coordinates and no projection was chosen.
-    #[error("{origin}: the mesh has no UV coordinates; choose a projection (--uv planar, box or spherical)")]
+    #[error(
+        "{origin}: the mesh has no UV coordinates; choose a projection (--uv planar, box or spherical)"
+    )]
     NoUvs { origin: String },
     /// Every triangle was skipped.
     #[error("{origin}: no usable triangles ({report})")]
@@ -80,7 +84,13 @@ pub enum MicroError {
 }
 
 /// Checks `value` lies in `[lo, hi]` (and is finite).
-pub fn check_range(name: &'static str, value: f64, lo: f64, hi: f64, range: &'static str) -> Result<(), MicroError> {
+pub fn check_range(
+    name: &'static str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    range: &'static str,
+) -> Result<(), MicroError> {
     if value.is_finite() && (lo..=hi).contains(&value) {
         Ok(())
     } else {

@@ -39,7 +39,13 @@ impl Grid {
     where
         F: Fn(&mut Evaluator<f64>, DVec3) -> (f64, u16) + Sync,
     {
-        check_range("grid resolution", n as f64, 2.0, limits::MAX_GRID as f64, "[2, 512] samples per axis")?;
+        check_range(
+            "grid resolution",
+            n as f64,
+            2.0,
+            limits::MAX_GRID as f64,
+            "[2, 512] samples per axis",
+        )?;
         let step = cell.size() / (n - 1) as f64;
         let nn = n as usize;
         let rows: Vec<(Vec<f32>, Vec<u16>)> = (0..nn * nn)
@@ -60,7 +66,13 @@ impl Grid {
             dist.extend(d);
             ids.extend(i);
         }
-        Ok(Grid { n, cell, step, dist, ids })
+        Ok(Grid {
+            n,
+            cell,
+            step,
+            dist,
+            ids,
+        })
     }
 
     /// Bakes a tape's distances and material ids.
@@ -109,7 +121,11 @@ impl Grid {
     }
 
     /// Compares with the exact field `exact` at `samples` deterministic random points.
-    pub fn error_against<F: Fn(&mut Evaluator<f64>, DVec3) -> f64>(&self, exact: F, samples: usize) -> GridError {
+    pub fn error_against<F: Fn(&mut Evaluator<f64>, DVec3) -> f64>(
+        &self,
+        exact: F,
+        samples: usize,
+    ) -> GridError {
         let mut ev = Evaluator::<f64>::new();
         let mut rng = crate::chaos::Rng(0x5eed_0f_9e1d);
         let mut e = GridError {
@@ -145,7 +161,12 @@ mod tests {
 
     fn texture() -> Tape {
         let s = Scene::new(
-            Node::new(Call::new(Primitive::Torus).with("major", &[0.6]).with("minor", &[0.15])).child(
+            Node::new(
+                Call::new(Primitive::Torus)
+                    .with("major", &[0.6])
+                    .with("minor", &[0.15]),
+            )
+            .child(
                 Node::new(Call::new(Primitive::Sphere).with("radius", &[0.3]))
                     .op(Call::new(Transform::Translate).with("offset", &[0.2, 0.3, -0.1])),
             ),
@@ -159,18 +180,28 @@ mod tests {
         let exact = |ev: &mut Evaluator<f64>, p: DVec3| ev.distance(&tape, V3::new(p.x, p.y, p.z));
         let errs: Vec<GridError> = [8u32, 16, 32, 64]
             .iter()
-            .map(|&n| Grid::bake(&tape, Cell::UNIT, n).unwrap().error_against(exact, 4000))
+            .map(|&n| {
+                Grid::bake(&tape, Cell::UNIT, n)
+                    .unwrap()
+                    .error_against(exact, 4000)
+            })
             .collect();
         for w in errs.windows(2) {
             assert!(
-                w[1].mean_abs < 0.75 * w[0].mean_abs && w[1].near_surface_mean_abs < w[0].near_surface_mean_abs,
+                w[1].mean_abs < 0.75 * w[0].mean_abs
+                    && w[1].near_surface_mean_abs < w[0].near_surface_mean_abs,
                 "error does not shrink: {errs:#?}"
             );
         }
         assert!(errs[3].mean_abs < 2e-3, "{:?}", errs[3]);
         // Exact at the nodes.
         let g = Grid::bake(&tape, Cell::UNIT, 5).unwrap();
-        assert!((g.sample(DVec3::new(0.5, 0.0, -1.0)) - exact(&mut Evaluator::new(), DVec3::new(0.5, 0.0, -1.0))).abs() < 1e-6);
+        assert!(
+            (g.sample(DVec3::new(0.5, 0.0, -1.0))
+                - exact(&mut Evaluator::new(), DVec3::new(0.5, 0.0, -1.0)))
+            .abs()
+                < 1e-6
+        );
         assert_eq!(g.memory_bytes(), 125 * 6);
     }
 
@@ -179,7 +210,10 @@ mod tests {
         let tape = texture();
         for n in [0, 1, limits::MAX_GRID + 1] {
             let e = Grid::bake(&tape, Cell::UNIT, n).unwrap_err().to_string();
-            assert!(e.contains("grid resolution") && e.contains("[2, 512]"), "{e}");
+            assert!(
+                e.contains("grid resolution") && e.contains("[2, 512]"),
+                "{e}"
+            );
         }
     }
 }

@@ -149,16 +149,39 @@ pub fn trace(
         let tet = &shell.tets[ti as usize];
         if show_base && span.face_in == tet.bottom_face {
             best = span.t_in;
-            r.hit = Some(Hit { t: span.t_in, tet: ti, kind: HitKind::Base });
+            r.hit = Some(Hit {
+                t: span.t_in,
+                tet: ti,
+                kind: HitKind::Base,
+            });
             continue;
         }
         let end = span.t_out.min(best);
-        if let Some((t, cu, cv)) = march_span(tex, shell, &mut s.ev, tet, o, d, span.t_in, end, p, &mut r.steps) {
+        if let Some((t, cu, cv)) = march_span(
+            tex,
+            shell,
+            &mut s.ev,
+            tet,
+            o,
+            d,
+            span.t_in,
+            end,
+            p,
+            &mut r.steps,
+        ) {
             best = t;
-            r.hit = Some(Hit { t, tet: ti, kind: HitKind::Texture { cu, cv } });
+            r.hit = Some(Hit {
+                t,
+                tet: ti,
+                kind: HitKind::Texture { cu, cv },
+            });
         } else if show_base && span.face_out == tet.bottom_face && span.t_out < best {
             best = span.t_out;
-            r.hit = Some(Hit { t: span.t_out, tet: ti, kind: HitKind::Base });
+            r.hit = Some(Hit {
+                t: span.t_out,
+                tet: ti,
+                kind: HitKind::Base,
+            });
         }
         if r.steps >= p.max_steps {
             break;

@@ -10,9 +10,9 @@ use crate::march::{self, HitKind, MarchParams, Scratch};
 use crate::shade::Lighting;
 use crate::shell::Shell;
 use crate::texture::Texture;
+use fathom_core::Camera;
 use fathom_core::frame::{Frame, NO_ID};
 use fathom_core::scene::Material;
-use fathom_core::Camera;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -34,9 +34,20 @@ pub struct MicroScene {
 }
 
 impl MicroScene {
-    pub fn new(shell: Shell, texture: Texture, lighting: Lighting, base: Option<Material>) -> MicroScene {
+    pub fn new(
+        shell: Shell,
+        texture: Texture,
+        lighting: Lighting,
+        base: Option<Material>,
+    ) -> MicroScene {
         let bvh = ShellBvh::build(&shell);
-        MicroScene { shell, bvh, texture, lighting, base }
+        MicroScene {
+            shell,
+            bvh,
+            texture,
+            lighting,
+            base,
+        }
     }
 }
 
@@ -71,7 +82,12 @@ impl RenderOptions {
     /// Checks sizes and knobs before anything is allocated.
     pub fn validate(&self) -> Result<(), MicroError> {
         let (w, h) = (self.width, self.height);
-        if w == 0 || h == 0 || w > limits::MAX_SIDE || h > limits::MAX_SIDE || w as u64 * h as u64 > limits::MAX_PIXELS {
+        if w == 0
+            || h == 0
+            || w > limits::MAX_SIDE
+            || h > limits::MAX_SIDE
+            || w as u64 * h as u64 > limits::MAX_PIXELS
+        {
             return Err(MicroError::Size(format!(
                 "image size {w}x{h} is outside the limits: 1 to {} pixels per side, at most {} pixels",
                 limits::MAX_SIDE,
@@ -79,7 +95,13 @@ impl RenderOptions {
             )));
         }
         crate::error::check_range("max steps", self.max_steps as f64, 1.0, 1e5, "[1, 100000]")?;
-        crate::error::check_range("pixel epsilon", self.pixel_epsilon, 0.01, 16.0, "[0.01, 16]")?;
+        crate::error::check_range(
+            "pixel epsilon",
+            self.pixel_epsilon,
+            0.01,
+            16.0,
+            "[0.01, 16]",
+        )?;
         self.camera.validate().map_err(MicroError::Camera)
     }
 
@@ -172,7 +194,17 @@ pub fn render(
             for k in 0..n {
                 let (x, y) = (x0 + k as u32 % tw, y0 + k as u32 / tw);
                 let d = cam.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                let r = march::trace(&scene.shell, &scene.bvh, &scene.texture, scene.base.is_some(), s, cam.eye, d, tmax, &params);
+                let r = march::trace(
+                    &scene.shell,
+                    &scene.bvh,
+                    &scene.texture,
+                    scene.base.is_some(),
+                    s,
+                    cam.eye,
+                    d,
+                    tmax,
+                    &params,
+                );
                 t.steps[k] = r.steps;
                 t.stats.de_march += r.steps as u64;
                 t.stats.tets_visited += r.tets_visited as u64;
@@ -195,7 +227,10 @@ pub fn render(
                 let (mat, fid) = match hit.kind {
                     HitKind::Base => {
                         t.stats.base_hits += 1;
-                        (scene.base.as_ref().expect("base hits only when shown"), BASE_ID)
+                        (
+                            scene.base.as_ref().expect("base hits only when shown"),
+                            BASE_ID,
+                        )
                     }
                     HitKind::Texture { .. } => {
                         t.stats.texture_hits += 1;
@@ -265,7 +300,9 @@ pub fn fit_camera(bounds: (DVec3, DVec3), from: DVec3, fov: f64, aspect: f64) ->
             if k & 4 == 0 { lo.z } else { hi.z },
         ) - c;
         let back = v.dot(-f.forward);
-        dist = dist.max(back + v.dot(f.right).abs() / tx).max(back + v.dot(f.up).abs() / ty);
+        dist = dist
+            .max(back + v.dot(f.right).abs() / tx)
+            .max(back + v.dot(f.up).abs() / ty);
     }
     cam.eye = c - f.forward * (dist * 1.05);
     cam

@@ -98,16 +98,25 @@ fn texture_error(origin: &str, e: impl ToString) -> MicroError {
     }
 }
 
-fn load_scene(spec: &TextureSpec, demo: Option<&crate::demo::Demo>) -> Result<(Scene, String), MicroError> {
+fn load_scene(
+    spec: &TextureSpec,
+    demo: Option<&crate::demo::Demo>,
+) -> Result<(Scene, String), MicroError> {
     match spec {
         TextureSpec::File(p) => {
             let o = p.display().to_string();
             Ok((scene_file::load(p).map_err(|e| texture_error(&o, e))?, o))
         }
-        TextureSpec::Preset(n) => Ok((presets::load(n).map_err(|e| texture_error(n, e))?, format!("<preset:{n}>"))),
+        TextureSpec::Preset(n) => Ok((
+            presets::load(n).map_err(|e| texture_error(n, e))?,
+            format!("<preset:{n}>"),
+        )),
         TextureSpec::Default | TextureSpec::Cloud(_) => match demo {
             Some(d) => Ok((d.texture.clone(), d.texture_origin.clone())),
-            None => Ok((presets::load("menger").map_err(|e| texture_error("menger", e))?, "<preset:menger>".into())),
+            None => Ok((
+                presets::load("menger").map_err(|e| texture_error("menger", e))?,
+                "<preset:menger>".into(),
+            )),
         },
     }
 }
@@ -135,13 +144,20 @@ impl Request {
                 let cloud = Cloud::new(&pts, self.cloud_radius, cell, 48)?;
                 // --bake gives the seed's approach: the cloud's exact distances on a grid.
                 let (field, how) = match self.bake {
-                    Some(n) => (Field::Grid(Grid::bake_with(cell, n, |_, q| (cloud.exact(q), 0))?), format!(" baked at {n}^3")),
+                    Some(n) => (
+                        Field::Grid(Grid::bake_with(cell, n, |_, q| (cloud.exact(q), 0))?),
+                        format!(" baked at {n}^3"),
+                    ),
                     None => (Field::Cloud(cloud), String::new()),
                 };
                 Texture {
                     field,
                     materials: vec![Material {
-                        albedo: if name == "fern" { [0.25, 0.6, 0.2] } else { [0.55, 0.45, 0.3] },
+                        albedo: if name == "fern" {
+                            [0.25, 0.6, 0.2]
+                        } else {
+                            [0.55, 0.45, 0.3]
+                        },
                         specular: 0.2,
                         shininess: 24.0,
                         trap_colour: 0.0,
@@ -164,7 +180,10 @@ impl Request {
                 }
             }
         };
-        let mesh_spec = self.mesh.clone().or_else(|| demo.as_ref().map(|d| d.name.to_string()));
+        let mesh_spec = self
+            .mesh
+            .clone()
+            .or_else(|| demo.as_ref().map(|d| d.name.to_string()));
         let fov = self.fov.unwrap_or(40.0);
         let camera_for = |bounds: (DVec3, DVec3), from: DVec3| {
             let mut c = fit_camera(bounds, from, fov, self.width as f64 / self.height as f64);
@@ -189,7 +208,12 @@ impl Request {
                 ..Default::default()
             };
             options.validate()?;
-            return Ok(Prepared::Alone { texture, cell, lighting, options });
+            return Ok(Prepared::Alone {
+                texture,
+                cell,
+                lighting,
+                options,
+            });
         };
         let (mesh, mesh_report) = match (&demo, self.mesh.is_none()) {
             (Some(d), true) => (d.mesh.clone(), d.mesh_report.clone()),
@@ -201,11 +225,16 @@ impl Request {
             .or(demo.as_ref().map(|d| d.shell_height))
             .unwrap_or(0.03 * (hi - lo).length());
         let tiling = Tiling {
-            tiles: self.tiles.or(demo.as_ref().map(|d| d.tiling.tiles)).unwrap_or(1.0),
+            tiles: self
+                .tiles
+                .or(demo.as_ref().map(|d| d.tiling.tiles))
+                .unwrap_or(1.0),
             cell,
         };
         let shell = Shell::build(&mesh, height, &tiling)?;
-        let from = demo.as_ref().map_or(DVec3::new(0.9, 0.6, 1.5), |d| d.view_from);
+        let from = demo
+            .as_ref()
+            .map_or(DVec3::new(0.9, 0.6, 1.5), |d| d.view_from);
         let options = RenderOptions {
             width: self.width,
             height: self.height,
@@ -243,7 +272,9 @@ pub fn parse_numbers(s: &str, n: usize) -> Result<Vec<f64>, String> {
         .collect::<Result<_, _>>()
         .map_err(|_| format!("`{s}` should be {n} comma-separated numbers"))?;
     if v.len() != n || !v.iter().all(|x| x.is_finite()) {
-        return Err(format!("`{s}` should be {n} comma-separated finite numbers"));
+        return Err(format!(
+            "`{s}` should be {n} comma-separated finite numbers"
+        ));
     }
     Ok(v)
 }

@@ -26,7 +26,12 @@ impl Lighting {
                 .lights
                 .iter()
                 .take(MAX_LIGHTS)
-                .map(|l| (l.direction.normalize(), DVec3::from_array(l.colour) * l.intensity))
+                .map(|l| {
+                    (
+                        l.direction.normalize(),
+                        DVec3::from_array(l.colour) * l.intensity,
+                    )
+                })
                 .collect(),
             sky_top: DVec3::from_array(s.render.sky_top),
             sky_bottom: DVec3::from_array(s.render.sky_bottom),

@@ -90,7 +90,11 @@ impl Shell {
                 let top = split.map(|(_, t)| t);
                 let verts: [DVec3; 4] = std::array::from_fn(|k| {
                     let i = tri[corner[k] as usize];
-                    if top[k] { top_of(i) } else { mesh.positions[i as usize] }
+                    if top[k] {
+                        top_of(i)
+                    } else {
+                        mesh.positions[i as usize]
+                    }
                 });
                 // The same tetrahedron in the ideal right prism fixes its orientation.
                 let ideal: [DVec3; 4] = std::array::from_fn(|k| {
@@ -139,10 +143,12 @@ impl Shell {
         prism_l.sort_by(f64::total_cmp);
         report.lipschitz_max = prism_l.last().copied().unwrap_or(0.0);
         report.lipschitz_median = prism_l.get(prism_l.len() / 2).copied().unwrap_or(0.0);
-        let bounds = tets.iter().flat_map(|t| t.verts).fold(
-            (DVec3::INFINITY, DVec3::NEG_INFINITY),
-            |(a, b), p| (a.min(p), b.max(p)),
-        );
+        let bounds = tets
+            .iter()
+            .flat_map(|t| t.verts)
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), p| {
+                (a.min(p), b.max(p))
+            });
         Ok(Shell {
             tets,
             neighbours,

@@ -57,7 +57,13 @@ impl Tiling {
         check_range("tiles", self.tiles, 1e-6, 1e6, "[1e-6, 1e6] per UV unit")?;
         let s = self.cell.size();
         for v in [s.x, s.y, s.z] {
-            check_range("cell size", v, 1e-9, 1e9, "[1e-9, 1e9] along each axis (max > min)")?;
+            check_range(
+                "cell size",
+                v,
+                1e-9,
+                1e9,
+                "[1e-9, 1e9] along each axis (max > min)",
+            )?;
         }
         if !(self.cell.min.is_finite() && self.cell.max.is_finite()) {
             return Err(MicroError::Range {

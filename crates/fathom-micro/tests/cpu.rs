@@ -46,12 +46,18 @@ const A: f64 = 0.499;
 const H: f64 = 0.5;
 
 fn flat_triangle() -> Mesh {
-    let p = [DVec3::new(-1.0, 0.0, -1.0), DVec3::new(-1.0, 0.0, 1.0), DVec3::new(1.0, 0.0, -1.0)];
+    let p = [
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::new(-1.0, 0.0, 1.0),
+        DVec3::new(1.0, 0.0, -1.0),
+    ];
     let raw = RawMesh {
         positions: p.to_vec(),
         triangles: vec![[0, 1, 2]],
         corner_normals: Some(vec![[DVec3::Y; 3]]),
-        corner_uvs: Some(vec![p.map(|q| DVec2::new(A * (q.x + 1.0), A * (q.z + 1.0)))]),
+        corner_uvs: Some(vec![
+            p.map(|q| DVec2::new(A * (q.x + 1.0), A * (q.z + 1.0))),
+        ]),
     };
     Mesh::build(raw, None, "flat").unwrap().0
 }
@@ -70,18 +76,33 @@ fn flat_triangle_matches_the_texture_marched_in_world_space() {
     };
     let tex = scene_of(
         Node::new(Primitive::Empty)
-            .child(Node::new(Call::new(Primitive::Sphere).with("radius", &[0.35])).op(at([-0.3, -0.95, -0.35])))
             .child(
-                Node::new(Call::new(Primitive::Torus).with("major", &[0.25]).with("minor", &[0.07]))
-                    .op(at([-0.55, -0.75, 0.3])),
+                Node::new(Call::new(Primitive::Sphere).with("radius", &[0.35]))
+                    .op(at([-0.3, -0.95, -0.35])),
             )
-            .child(Node::new(Call::new(Primitive::Box).with("size", &[0.15, 0.4, 0.15])).op(at([-0.05, -0.8, -0.05]))),
+            .child(
+                Node::new(
+                    Call::new(Primitive::Torus)
+                        .with("major", &[0.25])
+                        .with("minor", &[0.07]),
+                )
+                .op(at([-0.55, -0.75, 0.3])),
+            )
+            .child(
+                Node::new(Call::new(Primitive::Box).with("size", &[0.15, 0.4, 0.15]))
+                    .op(at([-0.05, -0.8, -0.05])),
+            ),
     );
     let m = micro(&flat_triangle(), H, &tiling, &tex);
     // A tight hit threshold on both sides, so the two marchers stop at the same surface.
     let o = RenderOptions {
         pixel_epsilon: 0.02,
-        ..options(96, 72, DVec3::new(1.0, 1.7, 1.9), DVec3::new(-0.35, 0.1, -0.35))
+        ..options(
+            96,
+            72,
+            DVec3::new(1.0, 1.7, 1.9),
+            DVec3::new(-0.35, 0.1, -0.35),
+        )
     };
     let (shell_frame, stats) = fathom_micro::render(&m, &o, &|_, _| {}).unwrap();
     assert!(stats.texture_hits > 300, "{stats:?}");
@@ -92,7 +113,11 @@ fn flat_triangle_matches_the_texture_marched_in_world_space() {
     let field = |ev: &mut Evaluator<f64>, p: DVec3| {
         let q = c + p * s;
         let d = ev.distance(&tape, V3::new(q.x, q.y, q.z)) / s;
-        let prism = (-p.y).max(p.y - H).max(-1.0 - p.x).max(-1.0 - p.z).max((p.x + p.z) / 2f64.sqrt());
+        let prism = (-p.y)
+            .max(p.y - H)
+            .max(-1.0 - p.x)
+            .max(-1.0 - p.z)
+            .max((p.x + p.z) / 2f64.sqrt());
         d.max(prism)
     };
     let cam = o.camera.frame();
@@ -127,12 +152,20 @@ fn flat_triangle_matches_the_texture_marched_in_world_space() {
         }
     }
     let n = (o.width * o.height) as f64;
-    assert!(agree as f64 >= 0.99 * n, "hit masks agree on {agree} of {n} pixels");
-    assert!(depth_ok as f64 >= 0.99 * both as f64, "depths agree on {depth_ok} of {both} common hits");
+    assert!(
+        agree as f64 >= 0.99 * n,
+        "hit masks agree on {agree} of {n} pixels"
+    );
+    assert!(
+        depth_ok as f64 >= 0.99 * both as f64,
+        "depths agree on {depth_ok} of {both} common hits"
+    );
 }
 
 fn plane_through(offset_y: f64, normal: [f64; 3]) -> Scene {
-    scene_of(Node::new(Call::new(Primitive::Plane).with("normal", &normal)).op(at([0.0, offset_y, 0.0])))
+    scene_of(
+        Node::new(Call::new(Primitive::Plane).with("normal", &normal)).op(at([0.0, offset_y, 0.0])),
+    )
 }
 
 #[test]
@@ -146,7 +179,9 @@ fn no_detail_appears_outside_the_shell() {
     let (cov, _) = fathom_micro::render(&cover, &o, &|_, _| {}).unwrap();
     // A big sphere poking into one corner of every tile and reaching far beyond the shell: a
     // ray that missed it inside the shell and went on marching would find it outside.
-    let ball = scene_of(Node::new(Call::new(Primitive::Sphere).with("radius", &[1.1])).op(at([0.9, 1.0, 0.9])));
+    let ball = scene_of(
+        Node::new(Call::new(Primitive::Sphere).with("radius", &[1.1])).op(at([0.9, 1.0, 0.9])),
+    );
     let tex = micro(&mesh, 0.15, &tiling, &ball);
     let (f, _) = fathom_micro::render(&tex, &o, &|_, _| {}).unwrap();
     let (mut outside, mut hits, mut covered) = (0, 0, 0);
@@ -159,9 +194,15 @@ fn no_detail_appears_outside_the_shell() {
             }
         }
     }
-    assert_eq!(outside, 0, "{outside} pixels show texture outside the shell");
+    assert_eq!(
+        outside, 0,
+        "{outside} pixels show texture outside the shell"
+    );
     // Not trivial: the ball is hit in many tiles and missed in many.
-    assert!(hits > covered / 5 && hits < covered * 9 / 10, "{hits} hits of {covered} covered");
+    assert!(
+        hits > covered / 5 && hits < covered * 9 / 10,
+        "{hits} hits of {covered} covered"
+    );
 }
 
 fn roof() -> Mesh {
@@ -200,14 +241,28 @@ fn shading_is_continuous_across_a_shared_edge() {
         march::surface(&m.shell, &m.texture, &mut s.ev, &hit, o, d, 1e-4, rotate).0
     };
     let deg = |a: DVec3, b: DVec3| a.angle_between(b).to_degrees();
-    let (l, r) = (normal_at(&mut s, -1e-4, true), normal_at(&mut s, 1e-4, true));
-    assert!(deg(l, r) < 0.1, "step of {} degrees across the edge", deg(l, r));
+    let (l, r) = (
+        normal_at(&mut s, -1e-4, true),
+        normal_at(&mut s, 1e-4, true),
+    );
+    assert!(
+        deg(l, r) < 0.1,
+        "step of {} degrees across the edge",
+        deg(l, r)
+    );
     // Away from the edge the normal turns with the surface, smoothly.
     let (l2, r2) = (normal_at(&mut s, -0.3, true), normal_at(&mut s, 0.3, true));
     assert!(deg(l2, r2) > 5.0);
     // Without the rotation the texture's own normals show the facets.
-    let (lf, rf) = (normal_at(&mut s, -1e-4, false), normal_at(&mut s, 1e-4, false));
-    assert!(deg(lf, rf) > 10.0, "the unrotated normals step by {} degrees", deg(lf, rf));
+    let (lf, rf) = (
+        normal_at(&mut s, -1e-4, false),
+        normal_at(&mut s, 1e-4, false),
+    );
+    assert!(
+        deg(lf, rf) > 10.0,
+        "the unrotated normals step by {} degrees",
+        deg(lf, rf)
+    );
 }
 
 #[test]
@@ -215,15 +270,25 @@ fn frames_do_not_depend_on_the_thread_count() {
     let demo = fathom_micro::demo::load("bush").unwrap();
     let shell = Shell::build(&demo.mesh, demo.shell_height, &demo.tiling).unwrap();
     let tex = Texture::from_scene(&demo.texture, "bush").unwrap();
-    let m = MicroScene::new(shell, tex, Lighting::from_scene(&demo.texture), Some(demo.base.clone()));
+    let m = MicroScene::new(
+        shell,
+        tex,
+        Lighting::from_scene(&demo.texture),
+        Some(demo.base.clone()),
+    );
     let o = options(64, 48, DVec3::new(1.6, 1.2, 2.6), DVec3::ZERO);
     let run = |threads| -> Frame {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| fathom_micro::render(&m, &o, &|_, _| {}).unwrap().0)
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a, b);
     // The base mesh shows between the leaves, and only when asked for.
-    let base = (0..a.len()).filter(|&i| a.id[i] == fathom_micro::render::BASE_ID).count();
+    let base = (0..a.len())
+        .filter(|&i| a.id[i] == fathom_micro::render::BASE_ID)
+        .count();
     assert!(base > 20, "{base} base pixels");
 }

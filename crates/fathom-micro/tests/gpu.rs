@@ -62,7 +62,10 @@ fn cpu_and_gpu_agree_on_both_demos() {
 #[test]
 fn a_refused_texture_and_an_oversized_image_are_clear_errors() {
     let mut g = GPU.lock().unwrap_or_else(|e| e.into_inner());
-    let Prepared::Shell { scene, mut options, .. } = prepared("teapot") else {
+    let Prepared::Shell {
+        scene, mut options, ..
+    } = prepared("teapot")
+    else {
         unreachable!()
     };
     let tape = scene.texture.tape().unwrap().clone();

@@ -50,7 +50,10 @@ pub fn run(a: MicroBenchArgs) -> Result<(), String> {
     }
     let demos: Vec<String> = match &a.demo {
         Some(d) => vec![d.clone()],
-        None => fathom_micro::demo::DEMOS.iter().map(|d| d.0.to_string()).collect(),
+        None => fathom_micro::demo::DEMOS
+            .iter()
+            .map(|d| d.0.to_string())
+            .collect(),
     };
     let mut gpu = if a.no_gpu {
         None
@@ -69,7 +72,8 @@ pub fn run(a: MicroBenchArgs) -> Result<(), String> {
         let mut cpu_ms = Vec::new();
         let mut cpu = None;
         for k in 0..=a.frames {
-            let (_, s) = fathom_micro::render(&scene, &options, &|_, _| {}).map_err(|e| e.to_string())?;
+            let (_, s) =
+                fathom_micro::render(&scene, &options, &|_, _| {}).map_err(|e| e.to_string())?;
             if k > 0 {
                 cpu_ms.push(s.ms_total);
             }
@@ -84,7 +88,9 @@ pub fn run(a: MicroBenchArgs) -> Result<(), String> {
                 let mut last = None;
                 let t0 = Instant::now();
                 for k in 0..=a.frames {
-                    let (_, s) = g.render(&scene, tape, &options).map_err(|e| e.to_string())?;
+                    let (_, s) = g
+                        .render(&scene, tape, &options)
+                        .map_err(|e| e.to_string())?;
                     if k > 0 {
                         ms.push(s.ms_total);
                     }
@@ -104,7 +110,8 @@ pub fn run(a: MicroBenchArgs) -> Result<(), String> {
         };
         // Baked grids of the demo's texture over its cell.
         let tape = scene.texture.tape().ok_or("the demo's texture is exact")?;
-        let exact = |ev: &mut Evaluator<f64>, p: glam::DVec3| ev.distance(tape, V3::new(p.x, p.y, p.z));
+        let exact =
+            |ev: &mut Evaluator<f64>, p: glam::DVec3| ev.distance(tape, V3::new(p.x, p.y, p.z));
         let mut bakes = Vec::new();
         for &n in &a.bake {
             let t0 = Instant::now();
@@ -123,7 +130,8 @@ pub fn run(a: MicroBenchArgs) -> Result<(), String> {
                 scene.lighting.clone(),
                 scene.base.clone(),
             );
-            let (_, s) = fathom_micro::render(&baked, &options, &|_, _| {}).map_err(|e| e.to_string())?;
+            let (_, s) =
+                fathom_micro::render(&baked, &options, &|_, _| {}).map_err(|e| e.to_string())?;
             bakes.push(serde_json::json!({
                 "resolution": n,
                 "memory_bytes": mem,
@@ -170,6 +178,9 @@ pub fn run(a: MicroBenchArgs) -> Result<(), String> {
         "load_average_after": load_average(),
         "demos": rows,
     });
-    println!("{}", serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+    );
     Ok(())
 }

@@ -129,7 +129,8 @@ impl MicroArgs {
         };
         r.texture_to = self.texture_to.clone();
         (r.time, r.period) = (self.time, self.period);
-        (r.shell, r.tiles, r.cell, r.uv, r.bake) = (self.shell, self.tiles, self.cell, self.uv, self.bake);
+        (r.shell, r.tiles, r.cell, r.uv, r.bake) =
+            (self.shell, self.tiles, self.cell, self.uv, self.bake);
         (r.cloud_points, r.cloud_radius) = (self.cloud_points, self.cloud_radius);
         r.show_base = !self.no_base;
         r.smooth_normals = !self.flat_normals;
@@ -158,7 +159,11 @@ fn stats_json(s: &MicroStats, extra: serde_json::Value) -> serde_json::Value {
 
 fn open(p: &Option<PathBuf>) -> Result<Option<(std::fs::File, &Path)>, String> {
     p.as_deref()
-        .map(|p| output::open_output(p).map(|f| (f, p)).map_err(|e| e.to_string()))
+        .map(|p| {
+            output::open_output(p)
+                .map(|f| (f, p))
+                .map_err(|e| e.to_string())
+        })
         .transpose()
 }
 
@@ -176,21 +181,30 @@ pub fn run(a: MicroArgs) -> Result<(), String> {
     } else {
         let b = indicatif::ProgressBar::new(0);
         b.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {percent}% {elapsed}")
-                .map_err(|e| e.to_string())?
-                .progress_chars("=> "),
+            indicatif::ProgressStyle::with_template(
+                "{spinner} {msg} [{bar:40}] {percent}% {elapsed}",
+            )
+            .map_err(|e| e.to_string())?
+            .progress_chars("=> "),
         );
         b
     };
     bar.set_message("preparing");
-    let prepared = pool.install(|| a.request().prepare()).map_err(|e| e.to_string())?;
+    let prepared = pool
+        .install(|| a.request().prepare())
+        .map_err(|e| e.to_string())?;
     let progress = |done: usize, total: usize| {
         bar.set_message("rendering");
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     };
     let (frame, stats, extra) = match prepared {
-        Prepared::Alone { texture, cell, lighting, options } => {
+        Prepared::Alone {
+            texture,
+            cell,
+            lighting,
+            options,
+        } => {
             if a.gpu {
                 return Err("a cloud on its own renders on the CPU only; leave out --gpu".into());
             }
@@ -198,9 +212,18 @@ pub fn run(a: MicroArgs) -> Result<(), String> {
             let (f, s) = pool
                 .install(|| fathom_micro::alone::render(&texture, &cell, &lighting, &options))
                 .map_err(|e| e.to_string())?;
-            (f, s, serde_json::json!({ "texture": texture.origin, "alone": true }))
+            (
+                f,
+                s,
+                serde_json::json!({ "texture": texture.origin, "alone": true }),
+            )
         }
-        Prepared::Shell { scene, options, mesh_report, texture_scene } => {
+        Prepared::Shell {
+            scene,
+            options,
+            mesh_report,
+            texture_scene,
+        } => {
             let extra = serde_json::json!({
                 "texture": scene.texture.origin,
                 "mesh": mesh_report.to_string(),
@@ -215,9 +238,14 @@ pub fn run(a: MicroArgs) -> Result<(), String> {
                     "--gpu takes exact textures only (not --bake or --cloud); leave out --gpu",
                 )?;
                 let mut g = fathom_micro::gpu::MicroGpu::headless().map_err(|e| e.to_string())?;
-                let (f, s) = g.render(&scene, tape, &options).map_err(|e| e.to_string())?;
+                let (f, s) = g
+                    .render(&scene, tape, &options)
+                    .map_err(|e| e.to_string())?;
                 if !a.quiet && g.is_software() {
-                    eprintln!("fathom: note: {} is a CPU implementation of Vulkan", g.adapter_name());
+                    eprintln!(
+                        "fathom: note: {} is a CPU implementation of Vulkan",
+                        g.adapter_name()
+                    );
                 }
                 (f, s)
             } else {

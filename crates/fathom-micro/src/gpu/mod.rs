@@ -8,8 +8,8 @@
 use crate::error::MicroError;
 use crate::render::{BASE_ID, MicroScene, MicroStats, RenderOptions, t_max};
 use crate::shell::Shell;
-use fathom_core::frame::{Frame, NO_ID};
 use fathom_core::Tape;
+use fathom_core::frame::{Frame, NO_ID};
 use fathom_gpu::{Gpu, GpuError};
 use glam::{DMat4, DVec3, DVec4};
 use std::time::Instant;
@@ -70,7 +70,11 @@ pub struct MicroGpu {
     shell: Option<ShellBuffers>,
 }
 
-fn entry(binding: u32, vis: wgpu::ShaderStages, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+fn entry(
+    binding: u32,
+    vis: wgpu::ShaderStages,
+    ty: wgpu::BufferBindingType,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: vis,
@@ -195,8 +199,16 @@ impl MicroGpu {
             })
         };
         use wgpu::BufferUsages as U;
-        let globals = buf("fathom micro globals", std::mem::size_of::<Globals>() as u64, U::UNIFORM | U::COPY_DST);
-        let counters = buf("fathom micro counters", 16, U::STORAGE | U::COPY_SRC | U::COPY_DST);
+        let globals = buf(
+            "fathom micro globals",
+            std::mem::size_of::<Globals>() as u64,
+            U::UNIFORM | U::COPY_DST,
+        );
+        let counters = buf(
+            "fathom micro counters",
+            16,
+            U::STORAGE | U::COPY_SRC | U::COPY_DST,
+        );
         Ok(MicroGpu {
             gpu,
             pipeline,
@@ -219,11 +231,25 @@ impl MicroGpu {
         self.gpu.adapter_name()
     }
 
-    fn storage(&self, label: &str, bytes: &[u8], usage: wgpu::BufferUsages, what: String) -> Result<wgpu::Buffer, GpuError> {
-        let limit = self.gpu.limits.max_storage_buffer_binding_size.min(self.gpu.limits.max_buffer_size);
+    fn storage(
+        &self,
+        label: &str,
+        bytes: &[u8],
+        usage: wgpu::BufferUsages,
+        what: String,
+    ) -> Result<wgpu::Buffer, GpuError> {
+        let limit = self
+            .gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.gpu.limits.max_buffer_size);
         let size = (bytes.len() as u64).max(16).next_multiple_of(4);
         if size > limit {
-            return Err(GpuError::BufferTooLarge { what, bytes: size, limit });
+            return Err(GpuError::BufferTooLarge {
+                what,
+                bytes: size,
+                limit,
+            });
         }
         let b = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
@@ -245,21 +271,49 @@ impl MicroGpu {
             .iter()
             .flat_map(|m| {
                 let a = m.albedo.map(|c| c as f32);
-                [a[0], a[1], a[2], m.specular as f32, m.shininess as f32, 0.0, 0.0, 0.0]
+                [
+                    a[0],
+                    a[1],
+                    a[2],
+                    m.specular as f32,
+                    m.shininess as f32,
+                    0.0,
+                    0.0,
+                    0.0,
+                ]
             })
             .collect();
         if let Some((_, p, m, w)) = &self.tape
             && *w == words
             && p.size() >= (params.len() as u64 * 4).max(16)
         {
-            self.gpu.queue.write_buffer(p, 0, bytemuck::cast_slice(&params));
-            self.gpu.queue.write_buffer(m, 0, bytemuck::cast_slice(&mats));
+            self.gpu
+                .queue
+                .write_buffer(p, 0, bytemuck::cast_slice(&params));
+            self.gpu
+                .queue
+                .write_buffer(m, 0, bytemuck::cast_slice(&mats));
             return Ok(());
         }
         use wgpu::BufferUsages as U;
-        let i = self.storage("fathom micro instrs", bytemuck::cast_slice(&words), U::STORAGE, format!("the tape ({} instructions)", words.len() / 4))?;
-        let p = self.storage("fathom micro params", bytemuck::cast_slice(&params), U::STORAGE, format!("the parameter buffer ({} parameters)", params.len()))?;
-        let m = self.storage("fathom micro materials", bytemuck::cast_slice(&mats), U::STORAGE, format!("the material table ({} materials)", mats.len() / 8))?;
+        let i = self.storage(
+            "fathom micro instrs",
+            bytemuck::cast_slice(&words),
+            U::STORAGE,
+            format!("the tape ({} instructions)", words.len() / 4),
+        )?;
+        let p = self.storage(
+            "fathom micro params",
+            bytemuck::cast_slice(&params),
+            U::STORAGE,
+            format!("the parameter buffer ({} parameters)", params.len()),
+        )?;
+        let m = self.storage(
+            "fathom micro materials",
+            bytemuck::cast_slice(&mats),
+            U::STORAGE,
+            format!("the material table ({} materials)", mats.len() / 8),
+        )?;
         self.tape = Some((i, p, m, words));
         Ok(())
     }
@@ -268,7 +322,10 @@ impl MicroGpu {
     pub fn set_shell(&mut self, shell: &Shell) -> Result<(), GpuError> {
         let key = (
             shell.tets.len(),
-            shell.tets.first().map_or([0; 3], |t| t.verts[0].to_array().map(f64::to_bits)),
+            shell
+                .tets
+                .first()
+                .map_or([0; 3], |t| t.verts[0].to_array().map(f64::to_bits)),
         );
         if self.shell.as_ref().is_some_and(|s| s.key == key) {
             return Ok(());
@@ -300,8 +357,18 @@ impl MicroGpu {
         }
         use wgpu::BufferUsages as U;
         let n = shell.tets.len();
-        let vertices = self.storage("fathom micro vertices", bytemuck::cast_slice(&verts), U::VERTEX, format!("the vertex buffer of {n} tetrahedra"))?;
-        let tets = self.storage("fathom micro tetrahedra", bytemuck::cast_slice(&gt), U::STORAGE, format!("the buffer of {n} tetrahedra"))?;
+        let vertices = self.storage(
+            "fathom micro vertices",
+            bytemuck::cast_slice(&verts),
+            U::VERTEX,
+            format!("the vertex buffer of {n} tetrahedra"),
+        )?;
+        let tets = self.storage(
+            "fathom micro tetrahedra",
+            bytemuck::cast_slice(&gt),
+            U::STORAGE,
+            format!("the buffer of {n} tetrahedra"),
+        )?;
         self.shell = Some(ShellBuffers {
             vertices,
             tets,
@@ -312,13 +379,23 @@ impl MicroGpu {
     }
 
     /// Renders `scene` with its texture's tape `tape` (the GPU path takes exact textures).
-    pub fn render(&mut self, scene: &MicroScene, tape: &Tape, o: &RenderOptions) -> Result<(Frame, MicroStats), MicroError> {
+    pub fn render(
+        &mut self,
+        scene: &MicroScene,
+        tape: &Tape,
+        o: &RenderOptions,
+    ) -> Result<(Frame, MicroStats), MicroError> {
         let start = Instant::now();
         o.validate()?;
         let (w, h) = (o.width, o.height);
         let tex_max = self.gpu.limits.max_texture_dimension_2d;
         if w > tex_max || h > tex_max {
-            return Err(GpuError::ImageTooLarge { width: w, height: h, limit: tex_max }.into());
+            return Err(GpuError::ImageTooLarge {
+                width: w,
+                height: h,
+                limit: tex_max,
+            }
+            .into());
         }
         self.gpu.check_lost()?;
         self.set_tape(tape)?;
@@ -350,8 +427,18 @@ impl MicroGpu {
                 f4(l.sky_bottom, o.pixel_angle()),
                 f4(cell.min, p.max_steps as f64),
                 f4(cell.size(), scene.base.is_some() as u8 as f64),
-                [base.albedo[0] as f32, base.albedo[1] as f32, base.albedo[2] as f32, base.specular as f32],
-                [base.shininess as f32, n_mats as f32, l.lights.len().min(8) as f32, o.smooth_normals as u8 as f32],
+                [
+                    base.albedo[0] as f32,
+                    base.albedo[1] as f32,
+                    base.albedo[2] as f32,
+                    base.specular as f32,
+                ],
+                [
+                    base.shininess as f32,
+                    n_mats as f32,
+                    l.lights.len().min(8) as f32,
+                    o.smooth_normals as u8 as f32,
+                ],
             ],
             lights,
         };
@@ -362,14 +449,30 @@ impl MicroGpu {
         let (instrs, params, mats, _) = self.tape.as_ref().expect("set above");
         let sb = self.shell.as_ref().expect("set above");
         let bind = |layout, entries: &[wgpu::BindGroupEntry]| {
-            dev.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout, entries })
+            dev.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout,
+                entries,
+            })
         };
         let g0 = bind(&self.tape_layout, &[e(0, instrs), e(1, params)]);
-        let g1 = bind(&self.micro_layout, &[e(0, &self.globals), e(1, &sb.tets), e(2, mats), e(3, &self.counters)]);
+        let g1 = bind(
+            &self.micro_layout,
+            &[
+                e(0, &self.globals),
+                e(1, &sb.tets),
+                e(2, mats),
+                e(3, &self.counters),
+            ],
+        );
         let target = |format, usage: wgpu::TextureUsages| {
             dev.create_texture(&wgpu::TextureDescriptor {
                 label: None,
-                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -386,9 +489,19 @@ impl MicroGpu {
         let views = [&colour, &normal, &ids].map(|t| t.create_view(&Default::default()));
         let dview = depth.create_view(&Default::default());
         let clears = [
-            wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: -1.0 },
+            wgpu::Color {
+                r: 0.0,
+                g: 0.0,
+                b: 0.0,
+                a: -1.0,
+            },
             wgpu::Color::TRANSPARENT,
-            wgpu::Color { r: NO_ID as f64, g: 0.0, b: 0.0, a: 0.0 },
+            wgpu::Color {
+                r: NO_ID as f64,
+                g: 0.0,
+                b: 0.0,
+                a: 0.0,
+            },
         ];
         let mut enc = dev.create_command_encoder(&Default::default());
         {
@@ -400,7 +513,10 @@ impl MicroGpu {
                         view: v,
                         depth_slice: None,
                         resolve_target: None,
-                        ops: wgpu::Operations { load: wgpu::LoadOp::Clear(c), store: wgpu::StoreOp::Store },
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(c),
+                            store: wgpu::StoreOp::Store,
+                        },
                     })
                 })
                 .collect();
@@ -409,7 +525,10 @@ impl MicroGpu {
                 color_attachments: &atts,
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &dview,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
                     stencil_ops: None,
                 }),
                 timestamp_writes: None,
@@ -437,9 +556,17 @@ impl MicroGpu {
                     t.as_image_copy(),
                     wgpu::TexelCopyBufferInfo {
                         buffer: &b,
-                        layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row), rows_per_image: None },
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(row),
+                            rows_per_image: None,
+                        },
                     },
-                    wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                    wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
                 );
                 (b, row)
             })
@@ -450,7 +577,8 @@ impl MicroGpu {
         for (b, row) in &readbacks {
             data.push((self.gpu.read_buffer(b, b.size())?, *row as usize));
         }
-        let counts: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.counters, 16)?).to_vec();
+        let counts: Vec<u32> =
+            bytemuck::cast_slice(&self.gpu.read_buffer(&self.counters, 16)?).to_vec();
         let mut frame = Frame::new(w, h);
         let mut stats = MicroStats {
             width: w,

@@ -59,7 +59,11 @@ pub fn raw(n: usize) -> RawMesh {
             for i in 0..n {
                 for j in 0..n {
                     let (a, b, c, d) = ((i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1));
-                    let quads = if sign > 0.0 { [[a, b, c], [b, d, c]] } else { [[a, c, b], [b, c, d]] };
+                    let quads = if sign > 0.0 {
+                        [[a, b, c], [b, d, c]]
+                    } else {
+                        [[a, c, b], [b, c, d]]
+                    };
                     for q in quads {
                         raw.triangles.push(q.map(|(x, y)| id(x, y)));
                         uvs.push(q.map(|(x, y)| uv(x, y)));

@@ -68,7 +68,11 @@ impl std::fmt::Display for MeshReport {
             self.skipped_degenerate,
             self.skipped_zero_uv_area,
             self.non_manifold_edges,
-            if self.normals_computed { "computed" } else { "from the file" },
+            if self.normals_computed {
+                "computed"
+            } else {
+                "from the file"
+            },
             self.uv_source
         )
     }
@@ -76,7 +80,10 @@ impl std::fmt::Display for MeshReport {
 
 /// The built-in meshes, by the name `fathom micro` accepts in place of a file.
 pub const BUILTINS: &[(&str, &str)] = &[
-    ("teapot", "the Utah teapot, Newell's 32 Bezier patches tessellated"),
+    (
+        "teapot",
+        "the Utah teapot, Newell's 32 Bezier patches tessellated",
+    ),
     ("bush", "a lobed cube-sphere bush"),
     ("triangle", "one flat triangle in the xz plane"),
 ];
@@ -153,7 +160,11 @@ impl Mesh {
         uv: Option<UvProjection>,
         origin: &str,
     ) -> Result<(Mesh, MeshReport), MeshError> {
-        check_counts(origin, raw.positions.len() as u64, raw.triangles.len() as u64)?;
+        check_counts(
+            origin,
+            raw.positions.len() as u64,
+            raw.triangles.len() as u64,
+        )?;
         let mut report = MeshReport {
             input_triangles: raw.triangles.len(),
             ..Default::default()
@@ -261,7 +272,8 @@ impl Mesh {
             .corner_normals
             .as_ref()
             .map(|c| kept_src.iter().map(|&k| c[k]).collect::<Vec<_>>());
-        let (normals, computed) = normals::vertex_normals(&compact, &kept, corner_normals.as_deref());
+        let (normals, computed) =
+            normals::vertex_normals(&compact, &kept, corner_normals.as_deref());
         report.normals_computed = computed;
         report.non_manifold_edges = non_manifold_edges(&kept);
         report.triangles = kept.len();
@@ -291,7 +303,10 @@ impl Mesh {
     pub fn face_normal(&self, t: usize) -> DVec3 {
         let [a, b, c] = self.triangles[t].map(|i| self.positions[i as usize]);
         let n = (b - a).cross(c - a).normalize_or_zero();
-        let avg: DVec3 = self.triangles[t].iter().map(|&i| self.normals[i as usize]).sum();
+        let avg: DVec3 = self.triangles[t]
+            .iter()
+            .map(|&i| self.normals[i as usize])
+            .sum();
         if n.dot(avg) < 0.0 { -n } else { n }
     }
 }

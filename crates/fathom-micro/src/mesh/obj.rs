@@ -67,7 +67,9 @@ pub fn scan(text: &str, origin: &str) -> Result<Counts, MeshError> {
                 // tobj reads f32: a value beyond its range would become infinite.
                 match w.parse::<f32>() {
                     Ok(x) => out.push(x as f64),
-                    Err(_) => return Err(at(off, format!("expected a number ({what}), found `{w}`"))),
+                    Err(_) => {
+                        return Err(at(off, format!("expected a number ({what}), found `{w}`")));
+                    }
                 }
             }
             Ok(out)
@@ -80,7 +82,11 @@ pub fn scan(text: &str, origin: &str) -> Result<Counts, MeshError> {
                     5 => {
                         let w = floats(4, 1, "the weight w")?[0];
                         if w == 0.0 || !w.is_finite() {
-                            return Err(at(words[4].0, "the weight w of a vertex must be a finite number other than 0".into()));
+                            return Err(at(
+                                words[4].0,
+                                "the weight w of a vertex must be a finite number other than 0"
+                                    .into(),
+                            ));
                         }
                     }
                     7 => {
@@ -125,7 +131,9 @@ pub fn scan(text: &str, origin: &str) -> Result<Counts, MeshError> {
 fn check_face_vertex(w: &str, c: &Counts) -> Result<(), String> {
     let parts: Vec<&str> = w.split('/').collect();
     if parts.len() > 3 || parts[0].is_empty() {
-        return Err(format!("expected a face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn`, found `{w}`"));
+        return Err(format!(
+            "expected a face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn`, found `{w}`"
+        ));
     }
     let names = ["vertex", "texture coordinate", "normal"];
     let have = [c.positions, c.texcoords, c.normals];
@@ -158,12 +166,13 @@ pub fn parse(text: &str, origin: &str) -> Result<RawMesh, MeshError> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) =
-        tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| MeshError::Invalid {
-                origin: origin.into(),
-                msg: format!("the OBJ reader refused the file: {e}"),
-            })?;
+    let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| MeshError::Invalid {
+        origin: origin.into(),
+        msg: format!("the OBJ reader refused the file: {e}"),
+    })?;
     let mut raw = RawMesh::default();
     let mut normals = Vec::new();
     let mut uvs = Vec::new();
@@ -177,8 +186,7 @@ pub fn parse(text: &str, origin: &str) -> Result<RawMesh, MeshError> {
                 .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)),
         );
         let has_n = mesh.normal_indices.len() == mesh.indices.len() && !mesh.normals.is_empty();
-        let has_t =
-            mesh.texcoord_indices.len() == mesh.indices.len() && !mesh.texcoords.is_empty();
+        let has_t = mesh.texcoord_indices.len() == mesh.indices.len() && !mesh.texcoords.is_empty();
         all_normals &= has_n;
         all_uvs &= has_t;
         for (k, t) in mesh.indices.chunks_exact(3).enumerate() {
@@ -186,9 +194,9 @@ pub fn parse(text: &str, origin: &str) -> Result<RawMesh, MeshError> {
             if has_n {
                 normals.push([0, 1, 2].map(|j| {
                     let i = mesh.normal_indices[3 * k + j] as usize * 3;
-                    mesh.normals
-                        .get(i..i + 3)
-                        .map_or(DVec3::ZERO, |n| DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64))
+                    mesh.normals.get(i..i + 3).map_or(DVec3::ZERO, |n| {
+                        DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64)
+                    })
                 }));
             }
             if has_t {

@@ -20,7 +20,9 @@ const DATA: &str = include_str!("../../data/teapot.txt");
 
 /// The 32 patches as 16 control points each (z up, as published).
 pub fn patches() -> Vec<[DVec3; 16]> {
-    let mut lines = DATA.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+    let mut lines = DATA
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
     let mut header = |want: &str| -> usize {
         let l = lines.next().expect("teapot data: header");
         let (w, n) = l.split_once(' ').expect("teapot data: header");
@@ -40,7 +42,10 @@ pub fn patches() -> Vec<[DVec3; 16]> {
         .collect();
     let nv = {
         let l = lines.next().expect("teapot data: points");
-        l.trim_start_matches("points").trim().parse::<usize>().expect("teapot data")
+        l.trim_start_matches("points")
+            .trim()
+            .parse::<usize>()
+            .expect("teapot data")
     };
     let pts: Vec<DVec3> = (0..nv)
         .map(|_| {
@@ -113,13 +118,15 @@ pub fn raw(divisions: usize, tile: f64) -> RawMesh {
         let tv = (len(false) / tile).round().max(1.0);
         raw.positions.extend(&grid);
         let id = |i: usize, j: usize| base + (i * (n + 1) + j) as u32;
-        let uv = |i: usize, j: usize| DVec2::new(i as f64 / n as f64 * tu, j as f64 / n as f64 * tv);
+        let uv =
+            |i: usize, j: usize| DVec2::new(i as f64 / n as f64 * tu, j as f64 / n as f64 * tv);
         for i in 0..n {
             for j in 0..n {
                 // Outward is Pv x Pu for this data set.
                 raw.triangles.push([id(i, j), id(i, j + 1), id(i + 1, j)]);
                 uvs.push([uv(i, j), uv(i, j + 1), uv(i + 1, j)]);
-                raw.triangles.push([id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)]);
+                raw.triangles
+                    .push([id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)]);
                 uvs.push([uv(i + 1, j), uv(i, j + 1), uv(i + 1, j + 1)]);
             }
         }

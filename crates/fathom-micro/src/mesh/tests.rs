@@ -49,10 +49,16 @@ fn syntax(text: &str) -> (usize, usize, String) {
 fn bad_obj_lines_name_line_and_column() {
     let (l, c, m) = syntax("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
     assert_eq!((l, c), (4, 7), "{m}");
-    assert!(m.contains("vertex index 4 is out of range") && m.contains("3 defined"), "{m}");
+    assert!(
+        m.contains("vertex index 4 is out of range") && m.contains("3 defined"),
+        "{m}"
+    );
     let (l, c, m) = syntax("v 0 0 0\nv 1 zero 0\n");
     assert_eq!((l, c), (2, 5));
-    assert!(m.contains("expected a number") && m.contains("`zero`"), "{m}");
+    assert!(
+        m.contains("expected a number") && m.contains("`zero`"),
+        "{m}"
+    );
     let (l, _, m) = syntax("v 0 0\n");
     assert_eq!(l, 1);
     assert!(m.contains("needs 3 numbers"), "{m}");
@@ -71,9 +77,17 @@ fn bad_obj_lines_name_line_and_column() {
 #[test]
 fn missing_oversized_and_unknown_files_are_refused_clearly() {
     let e = load("/nonexistent/mesh.obj", None).unwrap_err().to_string();
-    assert!(e.contains("/nonexistent/mesh.obj") && e.contains("cannot read"), "{e}");
+    assert!(
+        e.contains("/nonexistent/mesh.obj") && e.contains("cannot read"),
+        "{e}"
+    );
     let p = temp("huge.obj", b"");
-    std::fs::File::options().write(true).open(&p).unwrap().set_len(limits::MAX_MESH_FILE_BYTES + 1).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(&p)
+        .unwrap()
+        .set_len(limits::MAX_MESH_FILE_BYTES + 1)
+        .unwrap();
     let e = load(p.to_str().unwrap(), None).unwrap_err();
     assert!(matches!(e, MeshError::FileTooLarge { .. }), "{e}");
     let _ = std::fs::remove_file(&p);
@@ -92,7 +106,16 @@ fn meshes_over_the_size_limit_are_refused_before_allocation() {
     }
     text += "\nf 1 2 3\n";
     let e = obj::parse(&text, "big.obj").unwrap_err();
-    assert!(matches!(e, MeshError::TooLarge { what: "triangles", .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            MeshError::TooLarge {
+                what: "triangles",
+                ..
+            }
+        ),
+        "{e}"
+    );
     assert!(e.to_string().contains(&limits::MAX_TRIANGLES.to_string()));
 }
 
@@ -113,7 +136,15 @@ f 2/1 1/2 8/3
     let raw = obj::parse(text, "mixed.obj").unwrap();
     let (m, r) = Mesh::build(raw, None, "mixed.obj").unwrap();
     assert_eq!(r.input_triangles, 7);
-    assert_eq!((r.skipped_non_finite, r.skipped_degenerate, r.skipped_zero_uv_area), (1, 2, 1), "{r}");
+    assert_eq!(
+        (
+            r.skipped_non_finite,
+            r.skipped_degenerate,
+            r.skipped_zero_uv_area
+        ),
+        (1, 2, 1),
+        "{r}"
+    );
     assert_eq!(r.triangles, 3);
     assert_eq!(r.non_manifold_edges, 1, "{r}");
     assert!(m.positions.iter().all(|p| p.is_finite()));
@@ -124,15 +155,24 @@ f 2/1 1/2 8/3
 fn meshes_without_uvs_need_a_projection() {
     let text = "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 0 1 0\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
     let raw = obj::parse(text, "tet.obj").unwrap();
-    let e = Mesh::build(raw.clone(), None, "tet.obj").unwrap_err().to_string();
-    assert!(e.contains("no UV coordinates") && e.contains("planar, box or spherical"), "{e}");
+    let e = Mesh::build(raw.clone(), None, "tet.obj")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no UV coordinates") && e.contains("planar, box or spherical"),
+        "{e}"
+    );
     for (proj, _) in uv::PROJECTIONS {
         let (m, r) = Mesh::build(raw.clone(), Some(*proj), "tet.obj").unwrap();
         assert_eq!(r.skipped_zero_uv_area + r.triangles, 4, "{}", proj.name());
         assert!(r.normals_computed);
         assert!(m.uvs.iter().flatten().all(|u| u.is_finite()));
     }
-    assert!(UvProjection::parse("cylindrical").unwrap_err().contains("planar, box, spherical"));
+    assert!(
+        UvProjection::parse("cylindrical")
+            .unwrap_err()
+            .contains("planar, box, spherical")
+    );
 }
 
 fn gltf_json(positions: &[[f32; 3]], indices: &[u16]) -> String {
@@ -143,9 +183,14 @@ fn gltf_json(positions: &[[f32; 3]], indices: &[u16]) -> String {
     while bytes.len() % 4 != 0 {
         bytes.push(0);
     }
-    let (lo, hi) = positions.iter().fold(([f32::MAX; 3], [f32::MIN; 3]), |(l, h), p| {
-        ([0, 1, 2].map(|i| l[i].min(p[i])), [0, 1, 2].map(|i| h[i].max(p[i])))
-    });
+    let (lo, hi) = positions
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(l, h), p| {
+            (
+                [0, 1, 2].map(|i| l[i].min(p[i])),
+                [0, 1, 2].map(|i| h[i].max(p[i])),
+            )
+        });
     let b64 = base64::engine::general_purpose::STANDARD.encode(&bytes);
     format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
@@ -165,26 +210,53 @@ fn gltf_json(positions: &[[f32; 3]], indices: &[u16]) -> String {
 
 #[test]
 fn gltf_with_an_embedded_buffer_loads_with_its_node_transform() {
-    let json = gltf_json(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]], &[0, 2, 1]);
+    let json = gltf_json(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        &[0, 2, 1],
+    );
     let raw = gltf::parse(json.as_bytes(), None, "tri.gltf").unwrap();
     assert_eq!(raw.triangles, vec![[0, 2, 1]]);
-    assert!(raw.positions.iter().all(|p| p.y == 2.0), "translation applied");
+    assert!(
+        raw.positions.iter().all(|p| p.y == 2.0),
+        "translation applied"
+    );
     assert!(raw.corner_uvs.is_none());
     let (_, r) = Mesh::build(raw, Some(UvProjection::Planar), "tri.gltf").unwrap();
     assert_eq!(r.triangles, 1);
     // Out-of-range indices and broken JSON are clear errors.
-    let bad = gltf_json(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]], &[0, 2, 7]);
-    let e = gltf::parse(bad.as_bytes(), None, "bad.gltf").unwrap_err().to_string();
-    assert!(e.contains("bad.gltf") && e.contains("index 7 is out of range"), "{e}");
-    let e = gltf::parse(b"{\"asset\":", None, "cut.gltf").unwrap_err().to_string();
-    assert!(e.contains("cut.gltf") && e.contains("not a valid glTF"), "{e}");
+    let bad = gltf_json(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        &[0, 2, 7],
+    );
+    let e = gltf::parse(bad.as_bytes(), None, "bad.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("bad.gltf") && e.contains("index 7 is out of range"),
+        "{e}"
+    );
+    let e = gltf::parse(b"{\"asset\":", None, "cut.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cut.gltf") && e.contains("not a valid glTF"),
+        "{e}"
+    );
 }
 
 #[test]
 fn builtin_meshes_are_clean_and_outward() {
     for (name, _) in BUILTINS {
         let (m, r) = load(name, None).unwrap();
-        assert_eq!((r.skipped_non_finite, r.skipped_zero_uv_area, r.non_manifold_edges), (0, 0, 0), "{name}: {r}");
+        assert_eq!(
+            (
+                r.skipped_non_finite,
+                r.skipped_zero_uv_area,
+                r.non_manifold_edges
+            ),
+            (0, 0, 0),
+            "{name}: {r}"
+        );
         // Signed volume by the divergence theorem: positive when faces point outward.
         let vol: f64 = m
             .triangles
@@ -207,7 +279,10 @@ fn builtin_meshes_are_clean_and_outward() {
     }
     // The teapot's collapsed patch rows (lid knob, bottom centre) are the only degenerates.
     let (_, r) = load("teapot", None).unwrap();
-    assert!(r.skipped_degenerate > 0 && r.skipped_degenerate < r.input_triangles / 50, "{r}");
+    assert!(
+        r.skipped_degenerate > 0 && r.skipped_degenerate < r.input_triangles / 50,
+        "{r}"
+    );
 }
 
 /// A generated OBJ line: mostly valid, sometimes broken in the ways files are.

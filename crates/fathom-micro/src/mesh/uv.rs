@@ -22,17 +22,28 @@ pub const PROJECTIONS: &[(UvProjection, &str)] = &[
 
 impl UvProjection {
     pub fn name(self) -> &'static str {
-        PROJECTIONS.iter().find(|p| p.0 == self).map_or("?", |p| p.1)
+        PROJECTIONS
+            .iter()
+            .find(|p| p.0 == self)
+            .map_or("?", |p| p.1)
     }
 
     /// Parses a projection name; unknown names list the valid ones.
     pub fn parse(s: &str) -> Result<UvProjection, String> {
-        PROJECTIONS.iter().find(|p| p.1 == s).map(|p| p.0).ok_or_else(|| {
-            format!(
-                "unknown UV projection `{s}`; expected one of: {}",
-                PROJECTIONS.iter().map(|p| p.1).collect::<Vec<_>>().join(", ")
-            )
-        })
+        PROJECTIONS
+            .iter()
+            .find(|p| p.1 == s)
+            .map(|p| p.0)
+            .ok_or_else(|| {
+                format!(
+                    "unknown UV projection `{s}`; expected one of: {}",
+                    PROJECTIONS
+                        .iter()
+                        .map(|p| p.1)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
     }
 }
 

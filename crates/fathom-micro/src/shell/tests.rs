@@ -32,10 +32,17 @@ fn closed_meshes_give_crack_free_shells() {
             assert_eq!(r.boundary_faces, expected, "{name}: {r:?}");
         } else {
             // Each skipped tetrahedron can expose at most its four faces.
-            assert!(r.boundary_faces <= expected + 4 * r.skipped_inverted, "{name}: {r:?}");
+            assert!(
+                r.boundary_faces <= expected + 4 * r.skipped_inverted,
+                "{name}: {r:?}"
+            );
         }
         if name == "bush" {
-            assert_eq!((boundary_edges, r.skipped_inverted), (0, 0), "the bush is closed and smooth");
+            assert_eq!(
+                (boundary_edges, r.skipped_inverted),
+                (0, 0),
+                "the bush is closed and smooth"
+            );
             assert_eq!(r.tetrahedra, 3 * m.triangles.len());
         }
         // Neighbours are symmetric.
@@ -77,11 +84,18 @@ fn shell_coordinates_and_the_lipschitz_factor_hold() {
         for _ in 0..20 {
             let (a, b) = (inside(&mut rng), inside(&mut rng));
             let ratio = (scene(a) - scene(b)).length() / (a - b).length();
-            assert!(ratio <= tet.lipschitz * (1.0 + 1e-9), "{ratio} > {}", tet.lipschitz);
+            assert!(
+                ratio <= tet.lipschitz * (1.0 + 1e-9),
+                "{ratio} > {}",
+                tet.lipschitz
+            );
             tightest = tightest.max(ratio / tet.lipschitz);
         }
     }
-    assert!(tightest > 0.5, "the factor is far above any stretch seen: {tightest}");
+    assert!(
+        tightest > 0.5,
+        "the factor is far above any stretch seen: {tightest}"
+    );
 }
 
 #[test]
@@ -89,13 +103,21 @@ fn bad_shell_heights_are_refused_with_the_range() {
     let (m, _) = mesh::load("bush", None).unwrap();
     for h in [0.0, -0.1, f64::NAN, 100.0] {
         let e = Shell::build(&m, h, &tiling()).unwrap_err().to_string();
-        assert!(e.contains("shell height") && e.contains("bounding-box diagonal"), "{e}");
+        assert!(
+            e.contains("shell height") && e.contains("bounding-box diagonal"),
+            "{e}"
+        );
     }
     let bad = Tiling {
         tiles: 0.0,
         ..tiling()
     };
-    assert!(Shell::build(&m, 0.05, &bad).unwrap_err().to_string().contains("tiles"));
+    assert!(
+        Shell::build(&m, 0.05, &bad)
+            .unwrap_err()
+            .to_string()
+            .contains("tiles")
+    );
 }
 
 #[test]
