@@ -139,6 +139,17 @@ pub struct MicroStats {
 }
 
 impl MicroStats {
+    /// Zero counters for a `width` x `height` frame of `shell`.
+    pub fn new(shell: &Shell, width: u32, height: u32) -> MicroStats {
+        MicroStats {
+            width,
+            height,
+            triangles: shell.report.triangles,
+            tetrahedra: shell.report.tetrahedra,
+            ..Default::default()
+        }
+    }
+
     /// Texture distance evaluations per pixel, marching and shading together.
     pub fn de_per_pixel(&self) -> f64 {
         (self.de_march + self.de_shade) as f64 / (self.width as f64 * self.height as f64).max(1.0)
@@ -247,13 +258,7 @@ pub fn render(
         })
         .collect();
     let mut frame = Frame::new(w, h);
-    let mut stats = MicroStats {
-        width: w,
-        height: h,
-        triangles: scene.shell.report.triangles,
-        tetrahedra: scene.shell.report.tetrahedra,
-        ..Default::default()
-    };
+    let mut stats = MicroStats::new(&scene.shell, w, h);
     for (i, t) in tiles.iter().enumerate() {
         let (x0, y0) = ((i as u32 % tx) * TILE, (i as u32 / tx) * TILE);
         let tw = TILE.min(w - x0);

@@ -109,17 +109,6 @@ fn safe_normalize(v: vec3f, fallback: vec3f) -> vec3f {
     return select(fallback, v / l, l > 1e-30);
 }
 
-fn tetra(j: u32) -> vec3f {
-    if j == 0u {
-        return vec3f(1.0, -1.0, -1.0);
-    } else if j == 1u {
-        return vec3f(-1.0, -1.0, 1.0);
-    } else if j == 2u {
-        return vec3f(-1.0, 1.0, -1.0);
-    }
-    return vec3f(1.0, 1.0, 1.0);
-}
-
 fn sky(dir: vec3f) -> vec3f {
     let u = sqrt(clamp(dir.y, 0.0, 1.0));
     return mix(mg.sky_bottom.xyz, mg.sky_top.xyz, u);

@@ -581,14 +581,10 @@ impl MicroGpu {
             bytemuck::cast_slice(&self.gpu.read_buffer(&self.counters, 16)?).to_vec();
         let mut frame = Frame::new(w, h);
         let mut stats = MicroStats {
-            width: w,
-            height: h,
-            triangles: scene.shell.report.triangles,
-            tetrahedra: scene.shell.report.tetrahedra,
             de_march: counts[0] as u64,
             de_shade: counts[1] as u64,
             tets_visited: counts[2] as u64,
-            ..Default::default()
+            ..MicroStats::new(&scene.shell, w, h)
         };
         for y in 0..h as usize {
             for x in 0..w as usize {
