@@ -127,7 +127,7 @@ impl Grid {
         samples: usize,
     ) -> GridError {
         let mut ev = Evaluator::<f64>::new();
-        let mut rng = crate::chaos::Rng(0x5eed_0f_9e1d);
+        let mut rng = crate::chaos::Rng(0x005e_ed0f_9e1d);
         let mut e = GridError {
             samples,
             ..Default::default()
@@ -149,6 +149,18 @@ impl Grid {
         e.mean_abs = sum / samples.max(1) as f64;
         e.near_surface_mean_abs = near / e.near_surface_samples.max(1) as f64;
         e
+    }
+}
+
+impl Grid {
+    /// `d(node) - |q - node|` at the node nearest `q`: a lower bound of any 1-Lipschitz field
+    /// whose node values these are.
+    pub fn nearest_node_bound(&self, q: DVec3) -> f64 {
+        let g = ((q - self.cell.min) / self.step).round();
+        let m = (self.n - 1) as f64;
+        let i = g.clamp(DVec3::ZERO, DVec3::splat(m));
+        let node = self.cell.min + i * self.step;
+        self.at(i.x as usize, i.y as usize, i.z as usize) - (q - node).length()
     }
 }
 
@@ -215,17 +227,5 @@ mod tests {
                 "{e}"
             );
         }
-    }
-}
-
-impl Grid {
-    /// `d(node) - |q - node|` at the node nearest `q`: a lower bound of any 1-Lipschitz field
-    /// whose node values these are.
-    pub fn nearest_node_bound(&self, q: DVec3) -> f64 {
-        let g = ((q - self.cell.min) / self.step).round();
-        let m = (self.n - 1) as f64;
-        let i = g.clamp(DVec3::ZERO, DVec3::splat(m));
-        let node = self.cell.min + i * self.step;
-        self.at(i.x as usize, i.y as usize, i.z as usize) - (q - node).length()
     }
 }

@@ -64,7 +64,7 @@ pub fn march_span(
     p: &MarchParams,
     steps: &mut u32,
 ) -> Option<(f64, f64, f64)> {
-    if !(t1 > t0) {
+    if t1.partial_cmp(&t0) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let s0 = tet.shell_at(&tet.bary(o + d * t0));
@@ -202,6 +202,7 @@ pub fn rotate_between(a: DVec3, b: DVec3, x: DVec3) -> DVec3 {
 }
 
 /// The shading normal and material id at a hit (and the evaluations spent).
+#[allow(clippy::too_many_arguments)]
 pub fn surface(
     shell: &Shell,
     tex: &Texture,

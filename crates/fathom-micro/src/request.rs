@@ -77,7 +77,7 @@ impl Request {
 /// A prepared run: a shell scene, or a texture on its own (a cloud without a mesh).
 pub enum Prepared {
     Shell {
-        scene: MicroScene,
+        scene: Box<MicroScene>,
         options: RenderOptions,
         mesh_report: MeshReport,
         /// The texture's keyframe scene at the requested time (the GPU path uploads its tape).
@@ -256,7 +256,7 @@ impl Request {
         });
         let is_exact = texture.tape().is_some();
         Ok(Prepared::Shell {
-            scene: MicroScene::new(shell, texture, lighting, base),
+            scene: Box::new(MicroScene::new(shell, texture, lighting, base)),
             options,
             mesh_report,
             texture_scene: is_exact.then_some(scene),

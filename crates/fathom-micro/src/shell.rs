@@ -171,10 +171,8 @@ fn adjacency(mesh: &Mesh, tets: &[Tet], report: &mut ShellReport) -> Vec<[u32; 4
     for (ti, t) in tets.iter().enumerate() {
         for k in 0..4 {
             let mut key = [0u64; 3];
-            let mut n = 0;
-            for j in (0..4).filter(|&j| j != k) {
+            for (n, j) in (0..4).filter(|&j| j != k).enumerate() {
                 key[n] = shell_vertex(mesh, t, j);
-                n += 1;
             }
             key.sort_unstable();
             faces.entry(key).or_default().push((ti as u32, k as u8));

@@ -50,7 +50,7 @@ impl Tet {
         let m = DMat3::from_cols(v[1] - v[0], v[2] - v[0], v[3] - v[0]);
         let det = m.determinant();
         let scale = (v[1] - v[0]).length() * (v[2] - v[0]).length() * (v[3] - v[0]).length();
-        if !(det.abs() > 1e-12 * scale) {
+        if det.abs().partial_cmp(&(1e-12 * scale)) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
         let inv = m.inverse().transpose(); // rows of the inverse as columns

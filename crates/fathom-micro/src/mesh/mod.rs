@@ -217,7 +217,11 @@ impl Mesh {
                 continue;
             }
             let area2 = (p[1] - p[0]).cross(p[2] - p[0]).length();
-            if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] || !(area2 > area_floor) {
+            if w[0] == w[1]
+                || w[1] == w[2]
+                || w[0] == w[2]
+                || area2.partial_cmp(&area_floor) != Some(std::cmp::Ordering::Greater)
+            {
                 report.skipped_degenerate += 1;
                 continue;
             }
@@ -241,7 +245,9 @@ impl Mesh {
         let mut kept_src = Vec::with_capacity(tris.len());
         for ((t, u), k) in tris.into_iter().zip(uvs).zip(keep) {
             let a = (u[1] - u[0]).perp_dot(u[2] - u[0]);
-            if !(a.abs() > 1e-14) || u.iter().any(|x| !x.is_finite()) {
+            if a.abs().partial_cmp(&1e-14) != Some(std::cmp::Ordering::Greater)
+                || u.iter().any(|x| !x.is_finite())
+            {
                 report.skipped_zero_uv_area += 1;
                 continue;
             }

@@ -180,7 +180,7 @@ fn gltf_json(positions: &[[f32; 3]], indices: &[u16]) -> String {
     let mut bytes: Vec<u8> = bytemuck::cast_slice(positions).to_vec();
     let ioff = bytes.len();
     bytes.extend_from_slice(bytemuck::cast_slice(indices));
-    while bytes.len() % 4 != 0 {
+    while !bytes.len().is_multiple_of(4) {
         bytes.push(0);
     }
     let (lo, hi) = positions
