@@ -36,7 +36,11 @@ pub fn finish_view(mut frame: Frame, traced: Rect, keep: Rect, p: &PostParams) -
     if p.fog > 0.0 {
         fog(&mut frame, p.fog, p.fog_colour);
     }
-    let mut f = frame.crop(keep.relative_to(traced.x, traced.y));
+    let mut f = if keep == traced {
+        frame
+    } else {
+        frame.crop(keep.relative_to(traced.x, traced.y))
+    };
     if p.supersample > 1 {
         f = downsample(&f, p.supersample);
     }

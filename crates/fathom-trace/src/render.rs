@@ -374,7 +374,13 @@ pub fn render_tape(
         .map(|j| (j.3.width.div_ceil(TILE) * j.3.height.div_ceil(TILE)) as usize)
         .sum();
     let done = AtomicUsize::new(0);
-    let mut out = Frame::new(region.width, region.height);
+    // One view that is the whole region (a mono render) is the output itself: no copy.
+    let whole_view = jobs.len() == 1 && jobs[0].1 == region;
+    let mut out = if whole_view {
+        Frame::new(0, 0)
+    } else {
+        Frame::new(region.width, region.height)
+    };
     let mut stats = Stats::default();
     for (eye, part, keep, traced) in jobs {
         if hooks.cancelled() {
@@ -410,7 +416,11 @@ pub fn render_tape(
         let t_post = Instant::now();
         let view = post::finish_view(frame, traced, keep, &post);
         stats.ms_post += t_post.elapsed().as_secs_f64() * 1e3;
-        out.paste(&view, part.x - region.x, part.y - region.y);
+        if whole_view {
+            out = view;
+        } else {
+            out.paste(&view, part.x - region.x, part.y - region.y);
+        }
     }
     stats.deep = deep;
     stats.width = out.width;
