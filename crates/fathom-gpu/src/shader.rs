@@ -173,9 +173,12 @@ pub fn dispatch() -> String {
     s
 }
 
-/// The whole WGSL program: common declarations, every family, the generated dispatch, the
-/// interpreter and the entry points.
-pub fn source() -> String {
+/// The tape interpreter as a library for other shaders: the constants shared with Rust, the
+/// common declarations (the tape's instruction and parameter buffers at `@group(0)
+/// @binding(0)` and `@binding(1)`), every family, the generated dispatch and `eval_tape` /
+/// `eval_distance`, without this crate's own entry points and bindings. fathom-micro's
+/// fragment shader is written on top of it.
+pub fn interpreter_source() -> String {
     let mut s = fathom_core::shared::wgsl_declarations();
     for part in [COMMON, PRIMITIVES_WGSL, FRACTALS_WGSL, TRANSFORMS_WGSL] {
         s += part;
@@ -186,7 +189,15 @@ pub fn source() -> String {
         s += "\n";
     }
     s += &dispatch();
-    for part in [INTERP, EVAL_POINTS, TRACE] {
+    s += INTERP;
+    s += "\n";
+    s
+}
+
+/// The whole WGSL program: the interpreter library and the entry points.
+pub fn source() -> String {
+    let mut s = interpreter_source();
+    for part in [EVAL_POINTS, TRACE] {
         s += part;
         s += "\n";
     }

@@ -15,6 +15,8 @@ enum BenchKind {
     Eval(crate::bench_eval::EvalArgs),
     /// GPU renderer vs CPU tracer per preset: ms per frame and evaluations per pixel.
     Gpu(crate::bench_gpu::GpuArgs),
+    /// Microgeometry demos on the CPU and GPU renderers, and baked-grid error and memory.
+    Micro(crate::bench_micro::MicroBenchArgs),
     /// The sparse voxel octree explorer's evaluation: writes a markdown report with plots.
     Svo(crate::bench_svo::SvoArgs),
     /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
@@ -29,6 +31,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
         BenchKind::Gpu(g) => crate::bench_gpu::run(g),
+        BenchKind::Micro(m) => crate::bench_micro::run(m),
         BenchKind::Svo(s) => crate::bench_svo::run(s),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
         BenchKind::Volume(v) => crate::bench_volume::run(v),

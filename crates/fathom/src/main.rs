@@ -11,10 +11,12 @@ mod args;
 mod bench;
 mod bench_eval;
 mod bench_gpu;
+mod bench_micro;
 mod bench_svo;
 mod bench_trace;
 mod bench_volume;
 mod cmd_list;
+mod cmd_micro;
 mod cmd_render;
 mod cmd_scene;
 mod cmd_volume;
@@ -46,6 +48,7 @@ enum Command {
     /// Print a preset (or a scene file, normalised) as scene-file text.
     Scene(cmd_scene::SceneArgs),
     Zoom(cmd_zoom::ZoomArgs),
+    Micro(Box<cmd_micro::MicroArgs>),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
     Volume(Box<cmd_volume::VolumeArgs>),
@@ -70,6 +73,7 @@ fn main() -> ExitCode {
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
         Some(Command::Zoom(a)) => cmd_zoom::run(a),
+        Some(Command::Micro(a)) => cmd_micro::run(*a),
         Some(Command::Bench(a)) => bench::run(a),
         Some(Command::Volume(a)) => cmd_volume::run(*a),
     };
@@ -91,7 +95,7 @@ mod tests {
     fn every_command_help_teaches_by_example() {
         let mut cli = Cli::command();
         cli.build();
-        for name in ["render", "zoom", "list", "scene", "volume"] {
+        for name in ["render", "zoom", "list", "scene", "volume", "micro"] {
             let sub = cli.find_subcommand_mut(name).unwrap();
             let help = sub.render_long_help().to_string();
             let example = format!("\n  fathom {name} ");

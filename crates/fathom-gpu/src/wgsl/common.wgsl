@@ -64,6 +64,19 @@ fn min_elem(v: vec3f) -> f32 {
     return min(v.x, min(v.y, v.z));
 }
 
+// The tetrahedron offsets of Evaluator::normal, in its order (normals in every shader that
+// includes the interpreter).
+fn tetra(j: u32) -> vec3f {
+    if j == 0u {
+        return vec3f(1.0, -1.0, -1.0);
+    } else if j == 1u {
+        return vec3f(-1.0, -1.0, 1.0);
+    } else if j == 2u {
+        return vec3f(-1.0, 1.0, -1.0);
+    }
+    return vec3f(1.0, 1.0, 1.0);
+}
+
 fn param_vec3(o: u32) -> vec3f {
     return vec3f(params[o], params[o + 1u], params[o + 2u]);
 }

@@ -260,18 +260,6 @@ fn sky(dir: vec3f) -> vec3f {
     return mix(g.sky_bottom.xyz, g.sky_top.xyz, u);
 }
 
-// The tetrahedron offsets of Evaluator::normal, in its order.
-fn tetra(j: u32) -> vec3f {
-    if j == 0u {
-        return vec3f(1.0, -1.0, -1.0);
-    } else if j == 1u {
-        return vec3f(-1.0, -1.0, 1.0);
-    } else if j == 2u {
-        return vec3f(-1.0, 1.0, -1.0);
-    }
-    return vec3f(1.0, 1.0, 1.0);
-}
-
 // shade::soft_shadow: Aaltonen's improved penumbra estimate. Returns (factor, evaluations).
 fn soft_shadow(ro: vec3f, l: vec3f, eps: f32, k: f32) -> vec2f {
     var res = 1.0;

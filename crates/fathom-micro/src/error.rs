@@ -1,0 +1,103 @@
+//! What can go wrong building and rendering microgeometry, each error naming the file,
+//! parameter or limit at fault.
+
+use thiserror::Error;
+
+/// Why a mesh could not be read or used.
+#[derive(Debug, Error)]
+pub enum MeshError {
+    /// The file could not be opened or read.
+    #[error("{origin}: cannot read the mesh: {source}")]
+    Io {
+        origin: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is larger than [`crate::limits::MAX_MESH_FILE_BYTES`]; it was not read.
+    #[error("{origin}: the file is {size} bytes; mesh files are limited to {max} bytes", max = crate::limits::MAX_MESH_FILE_BYTES)]
+    FileTooLarge { origin: String, size: u64 },
+    /// More triangles (or vertices) than [`crate::limits`] allows; refused before allocation.
+    #[error("{origin}: the mesh has {count} {what}; the limit is {max}")]
+    TooLarge {
+        origin: String,
+        what: &'static str,
+        count: u64,
+        max: u64,
+    },
+    /// The text is not valid at a place in the file (1-based line and column).
+    #[error("{origin}:{line}:{col}: {msg}")]
+    Syntax {
+        origin: String,
+        line: usize,
+        col: usize,
+        msg: String,
+    },
+    /// The file parsed but is not a usable mesh (no place in the text to point at).
+    #[error("{origin}: {msg}")]
+    Invalid { origin: String, msg: String },
+    /// The extension names no format we read.
+    #[error(
+        "{origin}: unknown mesh format `{ext}`; expected one of: obj, gltf, glb (or a built-in mesh: {builtins})"
+    )]
+    UnknownFormat {
+        origin: String,
+        ext: String,
+        builtins: String,
+    },
+    /// The mesh has no texture coordinates and no projection was chosen.
+    #[error(
+        "{origin}: the mesh has no UV coordinates; choose a projection (--uv planar, box or spherical)"
+    )]
+    NoUvs { origin: String },
+    /// Every triangle was skipped.
+    #[error("{origin}: no usable triangles ({report})")]
+    Empty { origin: String, report: String },
+}
+
+/// Why a shell, texture or frame could not be built.
+#[derive(Debug, Error)]
+pub enum MicroError {
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A parameter is outside its documented range.
+    #[error("{name} = {value} is out of range {range}")]
+    Range {
+        name: &'static str,
+        value: String,
+        range: &'static str,
+    },
+    /// The texture scene does not compile or its keyframes do not match.
+    #[error("texture {origin}: {msg}")]
+    Texture { origin: String, msg: String },
+    /// The image size is empty or too large.
+    #[error("{0}")]
+    Size(String),
+    /// The camera cannot form an image.
+    #[error(transparent)]
+    Camera(#[from] fathom_core::camera::CameraError),
+    /// The GPU path failed.
+    #[error(transparent)]
+    Gpu(#[from] fathom_gpu::GpuError),
+    /// A feature the GPU path does not offer.
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+/// Checks `value` lies in `[lo, hi]` (and is finite).
+pub fn check_range(
+    name: &'static str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    range: &'static str,
+) -> Result<(), MicroError> {
+    if value.is_finite() && (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(MicroError::Range {
+            name,
+            value: value.to_string(),
+            range,
+        })
+    }
+}

@@ -1,0 +1,177 @@
+//! glTF 2.0 (`.gltf` with external or embedded buffers, `.glb`) through the `gltf` crate.
+//! Every triangle primitive of every mesh the default scene reaches is read with its node's
+//! world transform (normals by the inverse transpose). Buffers are resolved here rather than by
+//! `gltf::import`, which would also decode every image and fail on a missing texture we do not
+//! need; accessor counts are checked against the limits before any vertex is read.
+
+use super::{RawMesh, check_counts, read_limited};
+use crate::error::MeshError;
+use base64::Engine;
+use glam::{DMat3, DMat4, DVec2, DVec3};
+use std::path::Path;
+
+/// Reads a `.gltf` or `.glb` file.
+pub fn load(path: &Path) -> Result<RawMesh, MeshError> {
+    let bytes = read_limited(path)?;
+    parse(&bytes, path.parent(), &path.display().to_string())
+}
+
+fn invalid(origin: &str, msg: impl Into<String>) -> MeshError {
+    MeshError::Invalid {
+        origin: origin.into(),
+        msg: msg.into(),
+    }
+}
+
+/// Parses glTF or GLB bytes; external buffers are looked up relative to `dir`.
+pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, MeshError> {
+    let doc = gltf::Gltf::from_slice(bytes)
+        .map_err(|e| invalid(origin, format!("not a valid glTF 2.0 file: {e}")))?;
+    let mut buffers = Vec::new();
+    for b in doc.buffers() {
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => doc.blob.clone().ok_or_else(|| {
+                invalid(
+                    origin,
+                    format!(
+                        "buffer {} refers to the GLB binary chunk, which is missing",
+                        b.index()
+                    ),
+                )
+            })?,
+            gltf::buffer::Source::Uri(uri) => {
+                if let Some(rest) = uri.strip_prefix("data:") {
+                    let (_, b64) = rest.split_once(";base64,").ok_or_else(|| {
+                        invalid(
+                            origin,
+                            format!("buffer {}: only base64 data URIs are supported", b.index()),
+                        )
+                    })?;
+                    base64::engine::general_purpose::STANDARD
+                        .decode(b64)
+                        .map_err(|e| {
+                            invalid(
+                                origin,
+                                format!("buffer {}: bad base64 data: {e}", b.index()),
+                            )
+                        })?
+                } else {
+                    let p = dir.unwrap_or(Path::new(".")).join(uri);
+                    read_limited(&p)?
+                }
+            }
+        };
+        if data.len() < b.length() {
+            return Err(invalid(
+                origin,
+                format!(
+                    "buffer {} holds {} bytes but declares {}",
+                    b.index(),
+                    data.len(),
+                    b.length()
+                ),
+            ));
+        }
+        buffers.push(data);
+    }
+    // Meshes with their world transforms: the default scene's nodes, or every mesh once.
+    let mut instances: Vec<(gltf::Mesh, DMat4)> = Vec::new();
+    fn walk<'a>(n: gltf::Node<'a>, parent: DMat4, out: &mut Vec<(gltf::Mesh<'a>, DMat4)>) {
+        let m = parent
+            * DMat4::from_cols_array_2d(&n.transform().matrix().map(|c| c.map(|x| x as f64)));
+        if let Some(mesh) = n.mesh() {
+            out.push((mesh, m));
+        }
+        for c in n.children() {
+            walk(c, m, out);
+        }
+    }
+    match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(s) => s
+            .nodes()
+            .for_each(|n| walk(n, DMat4::IDENTITY, &mut instances)),
+        None => instances.extend(doc.meshes().map(|m| (m, DMat4::IDENTITY))),
+    }
+    // Sizes first, from the accessors, before reading anything.
+    let (mut nv, mut nt) = (0u64, 0u64);
+    for (mesh, _) in &instances {
+        for p in mesh
+            .primitives()
+            .filter(|p| p.mode() == gltf::mesh::Mode::Triangles)
+        {
+            let v = p.get(&gltf::Semantic::Positions).map_or(0, |a| a.count()) as u64;
+            nv += v;
+            nt += p.indices().map_or(v, |a| a.count() as u64) / 3;
+        }
+    }
+    check_counts(origin, nv, nt)?;
+    let mut raw = RawMesh::default();
+    let (mut normals, mut uvs) = (Vec::new(), Vec::new());
+    let (mut all_n, mut all_t) = (true, true);
+    let mut primitives = 0;
+    for (mesh, m) in &instances {
+        let nm = DMat3::from_mat4(*m).inverse().transpose();
+        for p in mesh
+            .primitives()
+            .filter(|p| p.mode() == gltf::mesh::Mode::Triangles)
+        {
+            primitives += 1;
+            let r = p.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
+            let pos: Vec<DVec3> = r
+                .read_positions()
+                .ok_or_else(|| {
+                    invalid(
+                        origin,
+                        format!("mesh {} has a primitive without positions", mesh.index()),
+                    )
+                })?
+                .map(|q| m.transform_point3(DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64)))
+                .collect();
+            let n: Option<Vec<DVec3>> = r.read_normals().map(|it| {
+                it.map(|q| nm * DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64))
+                    .collect()
+            });
+            let t: Option<Vec<DVec2>> = r.read_tex_coords(0).map(|it| {
+                it.into_f32()
+                    .map(|q| DVec2::new(q[0] as f64, q[1] as f64))
+                    .collect()
+            });
+            let idx: Vec<u32> = match r.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..pos.len() as u32).collect(),
+            };
+            if let Some(&bad) = idx.iter().find(|&&i| i as usize >= pos.len()) {
+                return Err(invalid(
+                    origin,
+                    format!(
+                        "mesh {}: index {bad} is out of range ({} vertices)",
+                        mesh.index(),
+                        pos.len()
+                    ),
+                ));
+            }
+            let n = n.filter(|n| n.len() == pos.len());
+            let t = t.filter(|t| t.len() == pos.len());
+            all_n &= n.is_some();
+            all_t &= t.is_some();
+            let base = raw.positions.len() as u32;
+            raw.positions.extend(&pos);
+            for tri in idx.chunks_exact(3) {
+                raw.triangles
+                    .push([tri[0] + base, tri[1] + base, tri[2] + base]);
+                if let Some(n) = &n {
+                    normals.push([0, 1, 2].map(|k| n[tri[k] as usize]));
+                }
+                if let Some(t) = &t {
+                    uvs.push([0, 1, 2].map(|k| t[tri[k] as usize]));
+                }
+            }
+        }
+    }
+    if primitives == 0 {
+        return Err(invalid(origin, "the file has no triangle primitives"));
+    }
+    raw.corner_normals = all_n.then_some(normals);
+    raw.corner_uvs = all_t.then_some(uvs);
+    Ok(raw)
+}

@@ -1,0 +1,364 @@
+use super::*;
+use crate::error::MeshError;
+use proptest::prelude::*;
+
+const QUAD: &str = "# a unit quad in the xz plane, two triangles
+v 0 0 0
+v 1 0 0
+v 1 0 1
+v 0 0 1
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vn 0 1 0
+f 1/1/1 4/4/1 3/3/1 2/2/1
+";
+
+fn temp(name: &str, contents: &[u8]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("fathom-micro-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, contents).unwrap();
+    p
+}
+
+#[test]
+fn obj_quad_loads_with_uvs_and_normals() {
+    let raw = obj::parse(QUAD, "quad.obj").unwrap();
+    assert_eq!(raw.triangles.len(), 2);
+    let (m, r) = Mesh::build(raw, None, "quad.obj").unwrap();
+    assert_eq!((r.triangles, r.vertices, r.normals_computed), (2, 4, false));
+    assert_eq!(r.uv_source, "file");
+    assert!(m.normals.iter().all(|n| (*n - DVec3::Y).length() < 1e-12));
+    assert!((0..2).all(|t| m.face_normal(t).dot(DVec3::Y) > 0.99));
+    // A file on disk reads the same.
+    let p = temp("quad.obj", QUAD.as_bytes());
+    let (m2, _) = load(p.to_str().unwrap(), None).unwrap();
+    assert_eq!(m2.triangles, m.triangles);
+}
+
+fn syntax(text: &str) -> (usize, usize, String) {
+    match obj::parse(text, "bad.obj") {
+        Err(MeshError::Syntax { line, col, msg, .. }) => (line, col, msg),
+        other => panic!("expected a syntax error for {text:?}, got {other:?}"),
+    }
+}
+
+#[test]
+fn bad_obj_lines_name_line_and_column() {
+    let (l, c, m) = syntax("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
+    assert_eq!((l, c), (4, 7), "{m}");
+    assert!(
+        m.contains("vertex index 4 is out of range") && m.contains("3 defined"),
+        "{m}"
+    );
+    let (l, c, m) = syntax("v 0 0 0\nv 1 zero 0\n");
+    assert_eq!((l, c), (2, 5));
+    assert!(
+        m.contains("expected a number") && m.contains("`zero`"),
+        "{m}"
+    );
+    let (l, _, m) = syntax("v 0 0\n");
+    assert_eq!(l, 1);
+    assert!(m.contains("needs 3 numbers"), "{m}");
+    let (_, _, m) = syntax("v 0 0 0\nf 0 1 1\n");
+    assert!(m.contains("index 0 is out of range"), "{m}");
+    let (_, _, m) = syntax("v 0 0 0\nvt 0 0\nf 1/9 1/1 1/1\n");
+    assert!(m.contains("texture coordinate index 9"), "{m}");
+    let (_, _, m) = syntax("v 0 0 0\nf 1/2/3/4 1 1\n");
+    assert!(m.contains("expected a face vertex"), "{m}");
+    let (_, _, m) = syntax("v 1 2 3 0\n");
+    assert!(m.contains("weight w"), "{m}");
+    let (_, _, m) = syntax("v 1 2 3 1e39\n");
+    assert!(m.contains("weight w") || m.contains("must not"), "{m}");
+}
+
+#[test]
+fn missing_oversized_and_unknown_files_are_refused_clearly() {
+    let e = load("/nonexistent/mesh.obj", None).unwrap_err().to_string();
+    assert!(
+        e.contains("/nonexistent/mesh.obj") && e.contains("cannot read"),
+        "{e}"
+    );
+    let p = temp("huge.obj", b"");
+    std::fs::File::options()
+        .write(true)
+        .open(&p)
+        .unwrap()
+        .set_len(limits::MAX_MESH_FILE_BYTES + 1)
+        .unwrap();
+    let e = load(p.to_str().unwrap(), None).unwrap_err();
+    assert!(matches!(e, MeshError::FileTooLarge { .. }), "{e}");
+    let _ = std::fs::remove_file(&p);
+    let e = load("thing.stl", None).unwrap_err().to_string();
+    assert!(e.contains("obj, gltf, glb") && e.contains("teapot"), "{e}");
+}
+
+#[test]
+fn meshes_over_the_size_limit_are_refused_before_allocation() {
+    let mut text = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    // One face line with MAX_TRIANGLES + 2 corners fans into MAX_TRIANGLES triangles, then one
+    // more face: the scan refuses it without tobj ever seeing it.
+    text += "f";
+    for _ in 0..limits::MAX_TRIANGLES + 2 {
+        text += " 1";
+    }
+    text += "\nf 1 2 3\n";
+    let e = obj::parse(&text, "big.obj").unwrap_err();
+    assert!(
+        matches!(
+            e,
+            MeshError::TooLarge {
+                what: "triangles",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains(&limits::MAX_TRIANGLES.to_string()));
+}
+
+#[test]
+fn bad_triangles_are_skipped_and_counted() {
+    // Triangle 1 fine, 2 has a NaN vertex, 3 is degenerate (collinear), 4 repeats a vertex,
+    // 5 has zero UV area; a sixth shares edge 1-2 with two others (non-manifold).
+    let text = "v 0 0 0\nv 1 0 0\nv 0 0 1\nv nan 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 1\nv 1 -1 1
+vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5
+f 1/1 3/3 2/2
+f 1/1 4/2 2/3
+f 1/1 2/2 5/3
+f 1/1 1/2 2/3
+f 1/4 2/4 6/4
+f 1/1 2/2 7/3
+f 2/1 1/2 8/3
+";
+    let raw = obj::parse(text, "mixed.obj").unwrap();
+    let (m, r) = Mesh::build(raw, None, "mixed.obj").unwrap();
+    assert_eq!(r.input_triangles, 7);
+    assert_eq!(
+        (
+            r.skipped_non_finite,
+            r.skipped_degenerate,
+            r.skipped_zero_uv_area
+        ),
+        (1, 2, 1),
+        "{r}"
+    );
+    assert_eq!(r.triangles, 3);
+    assert_eq!(r.non_manifold_edges, 1, "{r}");
+    assert!(m.positions.iter().all(|p| p.is_finite()));
+    assert!(r.to_string().contains("1 non-manifold"));
+}
+
+#[test]
+fn meshes_without_uvs_need_a_projection() {
+    let text = "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 0 1 0\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    let raw = obj::parse(text, "tet.obj").unwrap();
+    let e = Mesh::build(raw.clone(), None, "tet.obj")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no UV coordinates") && e.contains("planar, box or spherical"),
+        "{e}"
+    );
+    for (proj, _) in uv::PROJECTIONS {
+        let (m, r) = Mesh::build(raw.clone(), Some(*proj), "tet.obj").unwrap();
+        assert_eq!(r.skipped_zero_uv_area + r.triangles, 4, "{}", proj.name());
+        assert!(r.normals_computed);
+        assert!(m.uvs.iter().flatten().all(|u| u.is_finite()));
+    }
+    assert!(
+        UvProjection::parse("cylindrical")
+            .unwrap_err()
+            .contains("planar, box, spherical")
+    );
+}
+
+fn gltf_json(positions: &[[f32; 3]], indices: &[u16]) -> String {
+    use base64::Engine;
+    let mut bytes: Vec<u8> = bytemuck::cast_slice(positions).to_vec();
+    let ioff = bytes.len();
+    bytes.extend_from_slice(bytemuck::cast_slice(indices));
+    while !bytes.len().is_multiple_of(4) {
+        bytes.push(0);
+    }
+    let (lo, hi) = positions
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(l, h), p| {
+            (
+                [0, 1, 2].map(|i| l[i].min(p[i])),
+                [0, 1, 2].map(|i| h[i].max(p[i])),
+            )
+        });
+    let b64 = base64::engine::general_purpose::STANDARD.encode(&bytes);
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"mesh":0,"translation":[0,2,0]}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+"buffers":[{{"byteLength":{len},"uri":"data:application/octet-stream;base64,{b64}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{plen}}},{{"buffer":0,"byteOffset":{ioff},"byteLength":{ilen}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":{np},"type":"VEC3","min":{lo:?},"max":{hi:?}}},
+{{"bufferView":1,"componentType":5123,"count":{ni},"type":"SCALAR"}}]}}"#,
+        len = bytes.len(),
+        plen = ioff,
+        ilen = indices.len() * 2,
+        np = positions.len(),
+        ni = indices.len(),
+    )
+}
+
+#[test]
+fn gltf_with_an_embedded_buffer_loads_with_its_node_transform() {
+    let json = gltf_json(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        &[0, 2, 1],
+    );
+    let raw = gltf::parse(json.as_bytes(), None, "tri.gltf").unwrap();
+    assert_eq!(raw.triangles, vec![[0, 2, 1]]);
+    assert!(
+        raw.positions.iter().all(|p| p.y == 2.0),
+        "translation applied"
+    );
+    assert!(raw.corner_uvs.is_none());
+    let (_, r) = Mesh::build(raw, Some(UvProjection::Planar), "tri.gltf").unwrap();
+    assert_eq!(r.triangles, 1);
+    // Out-of-range indices and broken JSON are clear errors.
+    let bad = gltf_json(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        &[0, 2, 7],
+    );
+    let e = gltf::parse(bad.as_bytes(), None, "bad.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("bad.gltf") && e.contains("index 7 is out of range"),
+        "{e}"
+    );
+    let e = gltf::parse(b"{\"asset\":", None, "cut.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cut.gltf") && e.contains("not a valid glTF"),
+        "{e}"
+    );
+}
+
+#[test]
+fn builtin_meshes_are_clean_and_outward() {
+    for (name, _) in BUILTINS {
+        let (m, r) = load(name, None).unwrap();
+        assert_eq!(
+            (
+                r.skipped_non_finite,
+                r.skipped_zero_uv_area,
+                r.non_manifold_edges
+            ),
+            (0, 0, 0),
+            "{name}: {r}"
+        );
+        // Signed volume by the divergence theorem: positive when faces point outward.
+        let vol: f64 = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
+        if *name != "triangle" {
+            assert!(vol > 0.1, "{name}: volume {vol}");
+        }
+        // Vertex normals agree with the faces around them.
+        for (t, tri) in m.triangles.iter().enumerate() {
+            let f = m.face_normal(t);
+            for &i in tri {
+                assert!(m.normals[i as usize].dot(f) > -0.2, "{name}: triangle {t}");
+            }
+        }
+    }
+    // The teapot's collapsed patch rows (lid knob, bottom centre) are the only degenerates.
+    let (_, r) = load("teapot", None).unwrap();
+    assert!(
+        r.skipped_degenerate > 0 && r.skipped_degenerate < r.input_triangles / 50,
+        "{r}"
+    );
+}
+
+/// A generated OBJ line: mostly valid, sometimes broken in the ways files are.
+fn obj_line() -> impl Strategy<Value = String> {
+    let num = prop_oneof![
+        (-1e3f64..1e3).prop_map(|x| format!("{x}")),
+        Just("nan".to_string()),
+        Just("inf".to_string()),
+        Just("1e40".to_string()),
+        Just("x".to_string()),
+        Just("".to_string()),
+    ];
+    let idx = prop_oneof![
+        (-6i64..8).prop_map(|i| i.to_string()),
+        Just("99999999999999999999".to_string()),
+        (-6i64..8, -6i64..8).prop_map(|(a, b)| format!("{a}/{b}")),
+        (-6i64..8, -6i64..8).prop_map(|(a, b)| format!("{a}//{b}")),
+        (-6i64..8, -6i64..8, -6i64..8).prop_map(|(a, b, c)| format!("{a}/{b}/{c}")),
+        Just("1/".to_string()),
+        Just("/".to_string()),
+    ];
+    prop_oneof![
+        4 => proptest::collection::vec(num.clone(), 0..5).prop_map(|v| format!("v {}", v.join(" "))),
+        2 => proptest::collection::vec(num.clone(), 0..4).prop_map(|v| format!("vt {}", v.join(" "))),
+        2 => proptest::collection::vec(num, 0..4).prop_map(|v| format!("vn {}", v.join(" "))),
+        4 => proptest::collection::vec(idx, 0..6).prop_map(|v| format!("f {}", v.join(" "))),
+        1 => Just("o thing".to_string()),
+        1 => Just("# comment".to_string()),
+        1 => Just("usemtl x".to_string()),
+        1 => "[ -~]{0,12}",
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+    /// Loading never panics; a syntax error points inside the text; whatever loads cleans.
+    #[test]
+    fn obj_loader_survives_generated_text(lines in proptest::collection::vec(obj_line(), 0..24)) {
+        let text = lines.join("\n");
+        match obj::parse(&text, "fuzz.obj") {
+            Ok(raw) => {
+                let _ = Mesh::build(raw, Some(UvProjection::Box), "fuzz.obj");
+            }
+            Err(MeshError::Syntax { line, col, .. }) => {
+                prop_assert!(line >= 1 && line <= lines.len().max(1));
+                prop_assert!(col >= 1);
+            }
+            Err(_) => {}
+        }
+    }
+}
+
+/// Inputs that once needed care, replayed every run.
+#[test]
+fn obj_corpus_replays() {
+    let corpus = [
+        "",
+        "f",
+        "v",
+        "v 0 0 0\nf 1 1 1",
+        "v 0 0 0\nf -1 -1 -1",
+        "v 0 0 0\nf -2 1 1",
+        "v 0 0 0\nvt 0 0\nf 1/99999999999999999999 1 1",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 4",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2 3",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2 3",
+        "v 0 0 0 1 2\n",
+        "v nan nan nan\nv inf 0 0\nv 0 0 0\nf 1 2 3",
+        "v 1e38 1e38 1e38\nv -1e38 0 0\nv 0 1e38 0\nf 1 2 3",
+        "\u{feff}v 0 0 0",
+        "mtllib missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3",
+    ];
+    for text in corpus {
+        if let Ok(raw) = obj::parse(text, "corpus.obj") {
+            let _ = Mesh::build(raw, Some(UvProjection::Planar), "corpus.obj");
+        }
+    }
+}
