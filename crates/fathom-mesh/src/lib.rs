@@ -102,7 +102,7 @@ pub enum MeshError {
 }
 
 /// Receives a mesh as it is made: vertices in id order, then triangles that use them.
-pub trait MeshSink {
+pub trait MeshSink: Send {
     /// New vertices; the first has id = number of vertices sent before.
     fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError>;
     /// Triangles (counter-clockwise seen from outside) over ids sent so far; `window` holds

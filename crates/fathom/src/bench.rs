@@ -15,6 +15,9 @@ enum BenchKind {
     Eval(crate::bench_eval::EvalArgs),
     /// GPU renderer vs CPU tracer per preset: ms per frame and evaluations per pixel.
     Gpu(crate::bench_gpu::GpuArgs),
+    /// Streaming mesher: triangles/s, peak RSS and surface error for Menger and Mandelbulb,
+    /// sphere Hausdorff, and Mandelbulber2's mesh export where installed.
+    Mesh(crate::bench_mesh::MeshBenchArgs),
     /// The sparse voxel octree explorer's evaluation: writes a markdown report with plots.
     Svo(crate::bench_svo::SvoArgs),
     /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
@@ -26,6 +29,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
         BenchKind::Gpu(g) => crate::bench_gpu::run(g),
+        BenchKind::Mesh(m) => crate::bench_mesh::run(m),
         BenchKind::Svo(s) => crate::bench_svo::run(s),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
     }

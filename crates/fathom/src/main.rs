@@ -9,9 +9,12 @@ use std::process::ExitCode;
 mod bench;
 mod bench_eval;
 mod bench_gpu;
+mod bench_mesh;
 mod bench_svo;
 mod bench_trace;
+mod cmd_import;
 mod cmd_list;
+mod cmd_mesh;
 mod cmd_render;
 mod cmd_scene;
 mod cmd_zoom;
@@ -43,6 +46,8 @@ enum Command {
     /// Print a preset (or a scene file, normalised) as scene-file text.
     Scene(cmd_scene::SceneArgs),
     Zoom(cmd_zoom::ZoomArgs),
+    Mesh(Box<cmd_mesh::MeshArgs>),
+    Import(cmd_import::ImportArgs),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
 }
@@ -66,6 +71,8 @@ fn main() -> ExitCode {
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
         Some(Command::Zoom(a)) => cmd_zoom::run(a),
+        Some(Command::Mesh(a)) => cmd_mesh::run(*a),
+        Some(Command::Import(a)) => cmd_import::run(a),
         Some(Command::Bench(a)) => bench::run(a),
     };
     match result {
@@ -86,7 +93,7 @@ mod tests {
     fn every_command_help_teaches_by_example() {
         let mut cli = Cli::command();
         cli.build();
-        for name in ["render", "zoom", "list", "scene"] {
+        for name in ["render", "zoom", "list", "scene", "mesh", "import"] {
             let sub = cli.find_subcommand_mut(name).unwrap();
             let help = sub.render_long_help().to_string();
             let example = format!("\n  fathom {name} ");
