@@ -60,6 +60,16 @@ pub fn slots(method: Method, case: u8) -> u32 {
     }
 }
 
+/// Bisection steps for crossings next to an escape-time "inside" (1/64 of an edge).
+const BISECTIONS: usize = 6;
+
+/// Inside the surface: a negative estimate, or zero, which escape-time estimators (the
+/// Mandelbulb) return for points that never escape.
+#[inline]
+pub fn inside(d: f32) -> bool {
+    d <= 0.0
+}
+
 /// Evaluates distances at `pts` in packets of eight.
 fn distances(ev: &mut Evaluator<F32x8>, tape: &Tape, pts: &[DVec3], out: &mut Vec<f32>) {
     for chunk in pts.chunks(8) {
@@ -122,6 +132,7 @@ impl Field<'_> {
         // Crossings on sign-changing edges, indexed by corner * 3 + axis.
         let mut edge_of = vec![u32::MAX; vals.len() * 3];
         let mut crossings: Vec<Crossing> = Vec::new();
+        let mut bisect: Vec<(usize, DVec3, DVec3)> = Vec::new();
         for z in 0..cd[2] {
             for y in 0..cd[1] {
                 for x in 0..cd[0] {
@@ -133,11 +144,17 @@ impl Field<'_> {
                         }
                         let j = ci(x1, y1, z1);
                         let (a, b) = (vals[i], vals[j]);
-                        if (a < 0.0) == (b < 0.0) {
+                        if inside(a) == inside(b) {
                             continue;
                         }
-                        let t = (a as f64 / (a as f64 - b as f64)).clamp(0.0, 1.0);
                         edge_of[i * 3 + axis] = crossings.len() as u32;
+                        if a == 0.0 || b == 0.0 {
+                            // An escape-time estimate says "inside" without a distance:
+                            // locate the crossing by bisection below.
+                            let (pin, pout) = if inside(a) { (i, j) } else { (j, i) };
+                            bisect.push((crossings.len(), pts[pin], pts[pout]));
+                        }
+                        let t = (a as f64 / (a as f64 - b as f64)).clamp(0.0, 1.0);
                         crossings.push(Crossing {
                             p: pts[i] + (pts[j] - pts[i]) * t,
                             n: DVec3::ZERO,
@@ -146,6 +163,7 @@ impl Field<'_> {
                 }
             }
         }
+        evals += self.bisect(ev, &mut bisect, &mut crossings);
         if self.method == Method::DualContouring {
             let eps = <F32x8 as Real>::splat(0.25 * g.h);
             for chunk in crossings.chunks_mut(8) {
@@ -169,7 +187,7 @@ impl Field<'_> {
                     let mut case = 0u8;
                     for c in 0..8 {
                         let [dx, dy, dz] = corner(c);
-                        if vals[ci(x + dx, y + dy, z + dz)] < 0.0 {
+                        if inside(vals[ci(x + dx, y + dy, z + dz)]) {
                             case |= 1 << c;
                         }
                     }
@@ -229,6 +247,36 @@ impl Field<'_> {
             base: 0,
             evals,
         }
+    }
+
+    /// Moves the crossings of edges with an "inside, distance unknown" end (estimate exactly
+    /// 0) to the boundary found by bisection, eight edges per packet. Returns evaluations.
+    fn bisect(
+        &self,
+        ev: &mut Evaluator<F32x8>,
+        todo: &mut [(usize, DVec3, DVec3)],
+        crossings: &mut [Crossing],
+    ) -> u64 {
+        let mut evals = 0;
+        for chunk in todo.chunks_mut(8) {
+            for _ in 0..BISECTIONS {
+                let mids: Vec<DVec3> = chunk.iter().map(|(_, a, b)| (*a + *b) * 0.5).collect();
+                let mut d = Vec::with_capacity(8);
+                distances(ev, self.tape, &mids, &mut d);
+                evals += mids.len() as u64;
+                for ((_, a, b), (m, d)) in chunk.iter_mut().zip(mids.iter().zip(d)) {
+                    if inside(d) {
+                        *a = *m;
+                    } else {
+                        *b = *m;
+                    }
+                }
+            }
+            for (k, a, b) in chunk.iter() {
+                crossings[*k].p = (*a + *b) * 0.5;
+            }
+        }
+        evals
     }
 
     /// A dual vertex for one loop: its crossings' mean (surface nets), or the minimiser of the

@@ -9,10 +9,12 @@ use fathom_core::{Evaluator, Tape, V3};
 use glam::DVec3;
 use rayon::prelude::*;
 
-/// Half side of the search cube.
-pub const SEARCH_HALF: f64 = 64.0;
+/// Half side of the search cube. Kept small: escape-time estimators (the Mandelbulb's
+/// `0.5 ln r r / dr`) overestimate far outside their bailout radius, which would cull the
+/// object itself from a large search cube's first levels.
+pub const SEARCH_HALF: f64 = 8.0;
 /// Levels of the search: cells of `2 * SEARCH_HALF / 2^LEVELS`.
-pub const LEVELS: u32 = 11;
+pub const LEVELS: u32 = 9;
 
 /// The fitted box (min, max).
 pub fn fit_bounds(_scene: &Scene, tape: &Tape) -> Result<(DVec3, DVec3), MeshError> {

@@ -33,9 +33,17 @@ pub struct MeshBenchArgs {
     /// Write PLY files here instead of counting.
     #[arg(long)]
     write: Option<PathBuf>,
-    /// Mandelbulber2 voxel export resolutions to compare (empty to skip).
+    /// Mandelbulber2 voxel export resolutions to compare.
     #[arg(long, value_delimiter = ',', default_value = "256,512")]
     mandelbulber: Vec<u32>,
+    /// Mesh only this part of the fitted bounds along z, as fractions `F0,F1` of its height
+    /// (the cell size stays that of the full resolution): peak memory and throughput at a
+    /// high effective resolution without meshing every layer.
+    #[arg(long, value_delimiter = ',', num_args = 2)]
+    z_slab: Option<Vec<f64>>,
+    /// Skip the Mandelbulber2 comparison.
+    #[arg(long)]
+    skip_mandelbulber: bool,
     /// Internal: run one configuration `PRESET,RESOLUTION` and print its JSON.
     #[arg(long, hide = true)]
     single: Option<String>,
@@ -100,12 +108,23 @@ fn single(a: &MeshBenchArgs, spec: &str) -> Result<serde_json::Value, String> {
     let res: u32 = res.parse().map_err(|_| "bad resolution")?;
     let scene = presets::load(name)?;
     let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;
-    let o = MeshOptions {
+    let mut o = MeshOptions {
         resolution: res,
         method: crate::cmd_mesh::MeshArgs::method_of(a.method),
         max_memory: 16 << 30,
         ..MeshOptions::default()
     };
+    if let Some(f) = &a.z_slab {
+        let (lo, hi) = fathom_mesh::fit::fit_bounds(&scene, &tape).map_err(|e| e.to_string())?;
+        let z = |t: f64| lo.z + (hi.z - lo.z) * t.clamp(0.0, 1.0);
+        o.bounds = Some((DVec3::new(lo.x, lo.y, z(f[0])), DVec3::new(hi.x, hi.y, z(f[1]))));
+        if (hi.z - lo.z) > (hi - lo).max_element() * 0.999 && f[1] - f[0] < 1.0 {
+            // z was the longest side: keep the cell size of the whole box.
+            let full = (hi - lo).max_element();
+            let part = (z(f[1]) - z(f[0])).max((hi - lo).x).max((hi - lo).y);
+            o.resolution = ((res as f64) * part / full).round() as u32;
+        }
+    }
     let plan = fathom_mesh::plan(&scene, &tape, &o).map_err(|e| e.to_string())?;
     let inner: Box<dyn MeshSink> = match &a.write {
         Some(dir) => fathom_mesh::write::create(&dir.join(format!("{name}-{res}.ply")))
@@ -130,6 +149,7 @@ fn single(a: &MeshBenchArgs, spec: &str) -> Result<serde_json::Value, String> {
     Ok(serde_json::json!({
         "preset": name,
         "resolution": res,
+        "z_slab": a.z_slab,
         "method": o.method.name(),
         "cells": plan.grid.cells,
         "voxel": h,
@@ -268,6 +288,9 @@ pub fn run(a: MeshBenchArgs) -> Result<(), String> {
             if let Some(w) = &a.write {
                 cmd.arg("--write").arg(w);
             }
+            if let Some(f) = &a.z_slab {
+                cmd.arg("--z-slab").arg(format!("{},{}", f[0], f[1]));
+            }
             let out = cmd.output().map_err(|e| e.to_string())?;
             let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|_| {
                 serde_json::json!({"preset": name, "resolution": res,
@@ -283,7 +306,7 @@ pub fn run(a: MeshBenchArgs) -> Result<(), String> {
         .map(|r| sphere_hausdorff(method, r).unwrap_or_else(|e| serde_json::json!({"error": e})))
         .collect();
     let mut mb = Vec::new();
-    if std::path::Path::new("/usr/bin/mandelbulber2").exists() {
+    if !a.skip_mandelbulber && std::path::Path::new("/usr/bin/mandelbulber2").exists() {
         for name in &a.presets {
             for &res in &a.mandelbulber {
                 let v = mandelbulber(name, res).unwrap_or_else(|e| serde_json::json!({"error": e}));

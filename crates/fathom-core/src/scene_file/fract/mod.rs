@@ -179,14 +179,15 @@ impl Reader<'_> {
                     format!("expected `;` ending the setting `{key}`"),
                 ));
             };
-            if !body.starts_with([' ', '\t']) || body.trim().is_empty() {
+            if !(body.is_empty() || body.starts_with([' ', '\t'])) {
                 return Err(self.err(
                     line,
                     char_col(l, indent + key_len) + 1,
-                    format!("the setting `{key}` has no value; expected `{key} VALUE;`"),
+                    format!("expected a space between the setting `{key}` and its value"),
                 ));
             }
-            let value_at = indent + key_len + (body.len() - body.trim_start().len());
+            // An empty value is legal (an unset file name); typed reads refuse it.
+            let value_at = indent + key_len + (body.len() - body.trim_start().len()).max(1);
             let map = match section {
                 Section::Main => &mut s.main,
                 Section::Fractal(k) => &mut s.fractal[k],
@@ -248,6 +249,13 @@ impl<'a> Keys<'a> {
         let Some(s) = self.get(key) else {
             return Ok(None);
         };
+        if s.value.is_empty() {
+            return Err(self.r.err(
+                s.line,
+                s.col,
+                format!("the setting `{key}` has no value; expected `{key} VALUE;`"),
+            ));
+        }
         let parts: Vec<&str> = s.value.split_whitespace().collect();
         let what = if n == 1 {
             "a number".to_string()
@@ -396,8 +404,11 @@ pub fn parse(text: &str, origin: &str) -> Result<Imported, SceneFileError> {
             ));
         }
     }
-    let perspective = main.int("perspective_type", 0, 0, 10)?;
-    if perspective != 0 {
+    // Written as a number or, by newer versions, a name.
+    let perspective = main
+        .get("perspective_type")
+        .map_or("0", |s| s.value.as_str());
+    if !matches!(perspective, "0" | "threePoint") {
         warnings.push(format!(
             "{origin}:{}: perspective_type = {perspective}: only three-point perspective (0) is \
              supported; imported as a pinhole camera",

@@ -71,7 +71,7 @@ fn malformed_and_unsupported_input_names_file_line_and_column() {
     let cases: &[(&str, &str, (usize, usize))] = &[
         ("# Mandelbulber settings file\n[main_parameters]\ncamera 1 2;\n", "three numbers", (3, 8)),
         ("# Mandelbulber settings file\n[main_parameters]\nfov 1,5\n", "expected `;`", (3, 8)),
-        ("# Mandelbulber settings file\n[main_parameters]\nfov ;\n", "no value", (3, 4)),
+        ("# Mandelbulber settings file\n[main_parameters]\nfov ;\n", "no value", (3, 5)),
         ("# Mandelbulber settings file\n[main_parameters]\nfov x;\n", "not a number", (3, 5)),
         ("# Mandelbulber settings file\n[main_parameters]\nformula_1 10;\n", "not supported", (3, 11)),
         ("# Mandelbulber settings file\n[main_parameters]\nN 1.5;\n", "whole number", (3, 3)),
