@@ -28,6 +28,26 @@ impl Default for Camera {
     }
 }
 
+/// Why a camera cannot form an image.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CameraError {
+    #[error("camera: eye, target and up must be finite")]
+    NotFinite,
+    #[error("camera.fov = {fov} is out of range (0, 179] degrees")]
+    Fov { fov: f64 },
+    #[error("camera: eye and target coincide")]
+    Coincide,
+    #[error("camera: up is parallel to the view direction (or zero)")]
+    UpParallel,
+}
+
+/// Why a projection cannot be used.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ProjectionError {
+    #[error("eye separation = {value} is out of range [0, {MAX_EYE_SEPARATION}] (scene units)")]
+    EyeSeparation { value: f64 },
+}
+
 /// The orthonormal frame of a camera: `forward` looks at the target, `right` x `up` is `-forward`.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraFrame {
@@ -41,24 +61,21 @@ pub struct CameraFrame {
 
 impl Camera {
     /// Checks that the camera can form an image.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), CameraError> {
         if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
-            return Err("camera: eye, target and up must be finite".into());
+            return Err(CameraError::NotFinite);
         }
         if !(self.fov > 0.0 && self.fov <= 179.0) {
-            return Err(format!(
-                "camera.fov = {} is out of range (0, 179] degrees",
-                self.fov
-            ));
+            return Err(CameraError::Fov { fov: self.fov });
         }
         let f = self.target - self.eye;
         if f.length_squared() == 0.0 {
-            return Err("camera: eye and target coincide".into());
+            return Err(CameraError::Coincide);
         }
         if f.cross(self.up).length_squared()
             <= 1e-24 * f.length_squared() * self.up.length_squared()
         {
-            return Err("camera: up is parallel to the view direction (or zero)".into());
+            return Err(CameraError::UpParallel);
         }
         Ok(())
     }
@@ -97,7 +114,8 @@ impl CameraFrame {
 }
 
 /// How the rays leave the camera: one view, or a stereo pair laid out in one image.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Projection {
     /// One pinhole view.
     #[default]
@@ -117,12 +135,10 @@ pub const MAX_EYE_SEPARATION: f64 = 1e6;
 
 impl Projection {
     /// Checks the eye separation.
-    pub fn validate(self) -> Result<(), String> {
+    pub fn validate(self) -> Result<(), ProjectionError> {
         let sep = self.separation();
         if !(sep.is_finite() && (0.0..=MAX_EYE_SEPARATION).contains(&sep)) {
-            return Err(format!(
-                "eye separation = {sep} is out of range [0, {MAX_EYE_SEPARATION}] (scene units)"
-            ));
+            return Err(ProjectionError::EyeSeparation { value: sep });
         }
         Ok(())
     }
@@ -405,7 +421,8 @@ mod tests {
             }
             .validate()
             .unwrap_err();
-            assert!(e.contains("eye separation"), "{e}");
+            assert!(e.to_string().contains("eye separation"), "{e}");
+            assert!(matches!(e, ProjectionError::EyeSeparation { .. }));
         }
         assert!(Projection::Mono.validate().is_ok());
     }

@@ -24,7 +24,7 @@ pub struct Point<S> {
 }
 
 /// Orbit-trap value of a point no loop has touched.
-pub const NO_TRAP: f64 = 1e3;
+pub use crate::shared::NO_TRAP;
 
 /// What the value stack holds: the whole [`Value`] (materials, trap) or only the distance.
 ///

@@ -2,13 +2,16 @@
 //!
 //! - [`registry`]: how each primitive, fractal and operator is declared once;
 //! - [`primitives`], [`fractals`], [`transforms`], [`modifiers`], [`combine`]: the declarations;
-//! - [`scene`]: the scene tree, camera, lights, render settings;
+//! - [`scene`]: the scene tree, camera, lights, render settings; [`scenes`]: code-built ones;
+//! - [`camera`]: the camera and its projections; [`camera_path`]: zooms and tours over frames;
 //! - [`tape`]: the flat program a scene compiles to (see `docs/tape.md`);
 //! - [`eval`]: the CPU interpreter (f64 scalar and f32x8 packet paths) and normals;
-//! - [`reference`]: a direct tree walk that defines what the tape must compute.
+//! - [`reference`]: a direct tree walk that defines what the tape must compute;
+//! - [`shared`]: constants the CPU renderers and the WGSL program share, defined once.
 
 pub mod call_serde;
 pub mod camera;
+pub mod camera_path;
 pub mod combine;
 pub mod docgen;
 pub mod eval;
@@ -23,6 +26,8 @@ pub mod reference;
 pub mod registry;
 pub mod scene;
 pub mod scene_file;
+pub mod scenes;
+pub mod shared;
 pub mod tape;
 #[cfg(test)]
 mod tape_props;

@@ -65,18 +65,32 @@ pub static PRESETS: &[Preset] = &[
 /// render.
 pub const DEFAULT_PRESET: &str = "mandelbulb";
 
+/// Why a preset could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum PresetError {
+    /// No preset has this name; `hint` names the nearest valid ones.
+    #[error("unknown preset `{name}`; {hint}")]
+    Unknown { name: String, hint: String },
+    /// The shipped text does not parse (a bug, caught by the tests).
+    #[error(transparent)]
+    File(#[from] SceneFileError),
+}
+
 /// Finds a preset by name; unknown names list the valid ones, nearest first.
-pub fn find(name: &str) -> Result<&'static Preset, String> {
-    PRESETS.iter().find(|p| p.name == name).ok_or_else(|| {
-        crate::call_serde::unknown_name("preset", name, PRESETS.iter().map(|p| p.name))
-    })
+pub fn find(name: &str) -> Result<&'static Preset, PresetError> {
+    PRESETS
+        .iter()
+        .find(|p| p.name == name)
+        .ok_or_else(|| PresetError::Unknown {
+            name: name.into(),
+            hint: crate::call_serde::did_you_mean(name, PRESETS.iter().map(|p| p.name)),
+        })
 }
 
 /// Parses a preset into a scene.
-pub fn load(name: &str) -> Result<Scene, String> {
+pub fn load(name: &str) -> Result<Scene, PresetError> {
     let p = find(name)?;
-    scene_file::parse(p.text, &format!("<preset:{}>", p.name))
-        .map_err(|e: SceneFileError| e.to_string())
+    Ok(scene_file::parse(p.text, &format!("<preset:{}>", p.name))?)
 }
 
 #[cfg(test)]
@@ -160,6 +174,7 @@ mod tests {
     #[test]
     fn unknown_preset_lists_nearest_first() {
         let e = find("mandelbub").err().unwrap();
-        assert!(e.contains("did you mean `mandelbulb`"), "{e}");
+        assert!(matches!(&e, PresetError::Unknown { name, .. } if name == "mandelbub"));
+        assert!(e.to_string().contains("did you mean `mandelbulb`"), "{e}");
     }
 }

@@ -17,7 +17,7 @@ use crate::vec3::V3;
 
 const BIG: f64 = 1e6;
 /// Guards divisions by parameter-derived lengths that may be zero.
-const TINY: f64 = 1e-30;
+use crate::shared::TINY;
 
 crate::declare_family! {
     /// A signed-distance primitive.

@@ -49,39 +49,94 @@ impl ParamSpec {
     }
 
     /// Checks one value (all of its components) against the declared kind and range.
-    pub fn check(&self, v: &[f64]) -> Result<(), String> {
+    pub fn check(&self, v: &[f64]) -> Result<(), ParamError> {
+        let param = self.name;
         if v.len() != self.kind.width() {
-            return Err(format!(
-                "parameter `{}` takes {} number(s), got {}",
-                self.name,
-                self.kind.width(),
-                v.len()
-            ));
+            return Err(ParamError::Width {
+                param,
+                expected: self.kind.width(),
+                got: v.len(),
+            });
         }
-        for &x in v {
-            if !x.is_finite() {
-                return Err(format!(
-                    "parameter `{}` must be a finite number, got {x}",
-                    self.name
-                ));
+        for &value in v {
+            if !value.is_finite() {
+                return Err(ParamError::NotFinite { param, value });
             }
-            if x < self.min || x > self.max {
-                return Err(format!(
-                    "parameter `{}` = {x} is out of range [{}, {}]",
-                    self.name,
-                    fmt_num(self.min),
-                    fmt_num(self.max)
-                ));
+            if value < self.min || value > self.max {
+                return Err(ParamError::OutOfRange {
+                    param,
+                    value,
+                    min: self.min,
+                    max: self.max,
+                });
             }
-            if self.kind == ParamKind::Int && x.fract() != 0.0 {
-                return Err(format!(
-                    "parameter `{}` must be a whole number, got {x}",
-                    self.name
-                ));
+            if self.kind == ParamKind::Int && value.fract() != 0.0 {
+                return Err(ParamError::NotWhole { param, value });
             }
         }
         Ok(())
     }
+
+    /// `v` clamped into the declared range (non-finite components become the default, whole
+    /// numbers are rounded): what a slider or a modulation source may write.
+    pub fn clamp(&self, v: &[f64]) -> Vec<f64> {
+        v.iter()
+            .zip(self.default_values())
+            .map(|(&x, &d)| {
+                let x = if x.is_finite() { x } else { d };
+                let x = x.clamp(self.min, self.max);
+                if self.kind == ParamKind::Int {
+                    x.round()
+                } else {
+                    x
+                }
+            })
+            .collect()
+    }
+}
+
+/// Why a value does not fit a declared parameter.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ParamError {
+    #[error("parameter `{param}` takes {expected} number(s), got {got}")]
+    Width {
+        param: &'static str,
+        expected: usize,
+        got: usize,
+    },
+    #[error("parameter `{param}` must be a finite number, got {value}")]
+    NotFinite { param: &'static str, value: f64 },
+    #[error("parameter `{param}` = {value} is out of range [{}, {}]", fmt_num(*min), fmt_num(*max))]
+    OutOfRange {
+        param: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
+    #[error("parameter `{param}` must be a whole number, got {value}")]
+    NotWhole { param: &'static str, value: f64 },
+}
+
+/// Why a parameter list does not fit a registry entry.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum EntryError {
+    #[error("`{entry}` takes {expected} parameter values, got {got}")]
+    Count {
+        entry: &'static str,
+        expected: usize,
+        got: usize,
+    },
+    #[error("`{entry}` has no parameter `{name}`; it has: {}", valid.join(", "))]
+    NoSuchParam {
+        entry: &'static str,
+        name: String,
+        valid: Vec<&'static str>,
+    },
+    #[error("{entry}: {error}")]
+    Param {
+        entry: &'static str,
+        error: ParamError,
+    },
 }
 
 /// Formats a range bound readably (`1e+300` rather than three hundred digits).
@@ -160,20 +215,22 @@ impl Def {
     }
 
     /// Validates a full flat parameter list.
-    pub fn check(&self, values: &[f64]) -> Result<(), String> {
+    pub fn check(&self, values: &[f64]) -> Result<(), EntryError> {
         if values.len() != self.user_len() {
-            return Err(format!(
-                "`{}` takes {} parameter values, got {}",
-                self.name,
-                self.user_len(),
-                values.len()
-            ));
+            return Err(EntryError::Count {
+                entry: self.name,
+                expected: self.user_len(),
+                got: values.len(),
+            });
         }
         let mut off = 0;
         for p in self.params {
             let w = p.kind.width();
             p.check(&values[off..off + w])
-                .map_err(|e| format!("{}: {e}", self.name))?;
+                .map_err(|error| EntryError::Param {
+                    entry: self.name,
+                    error,
+                })?;
             off += w;
         }
         Ok(())

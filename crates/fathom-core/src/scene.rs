@@ -15,10 +15,9 @@
 use crate::camera::Camera;
 use crate::combine::Combine;
 use crate::fractals::Fractal;
-use crate::limits;
 use crate::modifiers::Modifier;
 use crate::primitives::Primitive;
-use crate::registry::{Def, Family};
+use crate::registry::{Def, EntryError, Family};
 use crate::transforms::Transform;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -112,21 +111,17 @@ impl<K: Family> Call<K> {
     }
 
     /// Sets a parameter by name, checking it against its declared range.
-    pub fn set(&mut self, name: &str, values: &[f64]) -> Result<(), String> {
+    pub fn set(&mut self, name: &str, values: &[f64]) -> Result<(), EntryError> {
         let def = self.kind.def();
-        let (off, spec) = def.param(name).ok_or_else(|| {
-            format!(
-                "`{}` has no parameter `{name}`; it has: {}",
-                def.name,
-                def.params
-                    .iter()
-                    .map(|p| p.name)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
+        let (off, spec) = def.param(name).ok_or_else(|| EntryError::NoSuchParam {
+            entry: def.name,
+            name: name.into(),
+            valid: def.params.iter().map(|p| p.name).collect(),
         })?;
-        spec.check(values)
-            .map_err(|e| format!("{}: {e}", def.name))?;
+        spec.check(values).map_err(|error| EntryError::Param {
+            entry: def.name,
+            error,
+        })?;
         self.params[off..off + values.len()].copy_from_slice(values);
         Ok(())
     }
@@ -147,7 +142,7 @@ impl<K: Family> Call<K> {
     }
 
     /// Checks every parameter against its declaration.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), EntryError> {
         self.kind.def().check(&self.params)
     }
 }
@@ -382,143 +377,7 @@ impl Scene {
             root,
         }
     }
-
-    /// Checks the version, every parameter, and the structural limits of [`crate::limits`].
-    /// Returns the first problem with the path of the node it is in.
-    pub fn validate(&self) -> Result<(), String> {
-        if self.version != SCENE_VERSION {
-            return Err(format!(
-                "scene version {} is not supported; this build reads version {SCENE_VERSION}",
-                self.version
-            ));
-        }
-        let nodes = self.root.count();
-        if nodes > limits::MAX_NODES {
-            return Err(format!(
-                "the scene has {nodes} nodes; the limit is {}",
-                limits::MAX_NODES
-            ));
-        }
-        let depth = self.root.depth();
-        if depth > limits::MAX_TREE_DEPTH {
-            return Err(format!(
-                "the tree is {depth} levels deep; the limit is {}",
-                limits::MAX_TREE_DEPTH
-            ));
-        }
-        if let Some(ifs) = &self.ifs {
-            if ifs.iterations > limits::MAX_IFS_ITERATIONS {
-                return Err(format!(
-                    "ifs.iterations = {} is out of range [0, {}]",
-                    ifs.iterations,
-                    limits::MAX_IFS_ITERATIONS
-                ));
-            }
-            if ifs.ops.len() > limits::MAX_OPS_PER_LIST {
-                return Err(format!(
-                    "ifs has {} operators; the limit is {}",
-                    ifs.ops.len(),
-                    limits::MAX_OPS_PER_LIST
-                ));
-            }
-            for (i, op) in ifs.ops.iter().enumerate() {
-                op.check().map_err(|e| format!("ifs.ops[{i}]: {e}"))?;
-            }
-        }
-        validate_node(&self.root, "root")?;
-        self.camera.validate()?;
-        if self.lights.len() > limits::MAX_LIGHTS {
-            return Err(format!(
-                "{} lights; the limit is {}",
-                self.lights.len(),
-                limits::MAX_LIGHTS
-            ));
-        }
-        for (i, l) in self.lights.iter().enumerate() {
-            let ok = l.direction.is_finite()
-                && l.direction.length_squared() > 0.0
-                && l.intensity.is_finite()
-                && (0.0..=1e3).contains(&l.intensity)
-                && l.colour
-                    .iter()
-                    .all(|c| c.is_finite() && (0.0..=1e3).contains(c));
-            if !ok {
-                return Err(format!(
-                    "lights[{i}]: direction must be finite and non-zero, colour and intensity in [0, 1000]"
-                ));
-            }
-        }
-        self.validate_render()
-    }
-
-    fn validate_render(&self) -> Result<(), String> {
-        let r = &self.render;
-        let ranged = |name: &str, v: f64, lo: f64, hi: f64| {
-            if v.is_finite() && (lo..=hi).contains(&v) {
-                Ok(())
-            } else {
-                Err(format!("render.{name} = {v} is out of range [{lo}, {hi}]"))
-            }
-        };
-        for (name, c) in [("sky_top", r.sky_top), ("sky_bottom", r.sky_bottom)] {
-            for v in c {
-                ranged(name, v, 0.0, 1e3)?;
-            }
-        }
-        for row in r.palette {
-            for v in row {
-                ranged("palette", v, -1e3, 1e3)?;
-            }
-        }
-        ranged("ambient", r.ambient, 0.0, 1.0)?;
-        ranged("ao", r.ao, 0.0, 4.0)?;
-        ranged("shadow_softness", r.shadow_softness, 1.0, 256.0)?;
-        ranged("fog", r.fog, 0.0, 1e6)?;
-        ranged(
-            "max_steps",
-            r.max_steps as f64,
-            1.0,
-            limits::MAX_STEPS as f64,
-        )?;
-        ranged("max_distance", r.max_distance, 1e-9, 1e12)?;
-        ranged("pixel_epsilon", r.pixel_epsilon, 0.01, 16.0)?;
-        Ok(())
-    }
 }
 
-fn validate_node(n: &Node, path: &str) -> Result<(), String> {
-    n.combine
-        .check()
-        .map_err(|e| format!("{path}.combine: {e}"))?;
-    n.shape.check().map_err(|e| format!("{path}.shape: {e}"))?;
-    if n.ops.len() > limits::MAX_OPS_PER_LIST {
-        return Err(format!(
-            "{path}.ops: {} operators; the limit is {}",
-            n.ops.len(),
-            limits::MAX_OPS_PER_LIST
-        ));
-    }
-    for (i, op) in n.ops.iter().enumerate() {
-        op.check().map_err(|e| format!("{path}.ops[{i}]: {e}"))?;
-    }
-    let m = &n.material;
-    let mat_ok = m
-        .albedo
-        .iter()
-        .all(|c| c.is_finite() && (0.0..=1.0).contains(c))
-        && m.specular.is_finite()
-        && (0.0..=1.0).contains(&m.specular)
-        && m.shininess.is_finite()
-        && (1.0..=4096.0).contains(&m.shininess)
-        && m.trap_colour.is_finite()
-        && (0.0..=1.0).contains(&m.trap_colour);
-    if !mat_ok {
-        return Err(format!(
-            "{path}.material: albedo and specular must lie in [0, 1], shininess in [1, 4096], trap_colour in [0, 1]"
-        ));
-    }
-    for (i, c) in n.children.iter().enumerate() {
-        validate_node(c, &format!("{path}.children[{i}]"))?;
-    }
-    Ok(())
-}
+mod validate;
+pub use validate::SceneError;

@@ -8,7 +8,7 @@
 //! limit, so absurd nesting is an error and not a stack overflow) and [`Scene::validate`].
 
 use crate::limits;
-use crate::scene::{SCENE_VERSION, Scene};
+use crate::scene::{SCENE_VERSION, Scene, SceneError};
 use std::path::Path;
 use thiserror::Error;
 
@@ -29,8 +29,8 @@ pub enum SceneFileError {
     },
     /// The scene parsed but breaks a limit or rule that has no single place in the text (the
     /// tree is too deep, too many lights), or at a place left to its default.
-    #[error("{origin}: {msg}")]
-    Invalid { origin: String, msg: String },
+    #[error("{origin}: {error}")]
+    Invalid { origin: String, error: SceneError },
     /// The file could not be read or written.
     #[error("{origin}: {source}")]
     Io {
@@ -85,15 +85,16 @@ pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneFileError> {
         syntax(pos, msg)
     })?;
     // Rule violations name a node path; point at it in the text when it is written there.
-    scene
-        .validate()
-        .map_err(|msg| match lex::locate_path(&tokens, &msg) {
+    scene.validate().map_err(|error| {
+        let msg = error.to_string();
+        match lex::locate_path(&tokens, &msg) {
             Some(pos) => syntax(pos, msg),
             None => SceneFileError::Invalid {
                 origin: origin.into(),
-                msg,
+                error,
             },
-        })?;
+        }
+    })?;
     Ok(scene)
 }
 

@@ -97,10 +97,10 @@ impl Instr {
 }
 
 /// Why a scene did not compile.
-#[derive(Debug, Error, PartialEq)]
+#[derive(Clone, Debug, Error, PartialEq)]
 pub enum CompileError {
     #[error("invalid scene: {0}")]
-    Invalid(String),
+    Invalid(#[from] crate::scene::SceneError),
     #[error("the tape would have {0} instructions; the limit is {max}", max = limits::MAX_TAPE_LEN)]
     TooLong(usize),
     #[error("the parameter buffer would have {0} slots; the limit is {max}", max = limits::MAX_PARAMS)]
@@ -399,7 +399,7 @@ mod tests {
     use crate::combine::Combine;
     use crate::primitives::Primitive;
     use crate::reference::eval_tree;
-    use crate::scene::Ifs;
+    use crate::scene::{Ifs, SceneError};
 
     fn two_spheres() -> Scene {
         Scene::new(
@@ -453,7 +453,10 @@ mod tests {
         }
         let e = Tape::compile(&Scene::new(deep)).unwrap_err();
         assert!(
-            matches!(&e, CompileError::Invalid(m) if m.contains("levels deep")),
+            matches!(
+                &e,
+                CompileError::Invalid(SceneError::TooDeep { depth }) if *depth == limits::MAX_TREE_DEPTH + 1
+            ) && e.to_string().contains("levels deep"),
             "{e}"
         );
 
@@ -463,7 +466,8 @@ mod tests {
         };
         let e = Tape::compile(&Scene::new(wide)).unwrap_err();
         assert!(
-            matches!(&e, CompileError::Invalid(m) if m.contains("nodes")),
+            matches!(&e, CompileError::Invalid(SceneError::TooManyNodes { .. }))
+                && e.to_string().contains("nodes"),
             "{e}"
         );
 

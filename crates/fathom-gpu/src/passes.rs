@@ -11,7 +11,8 @@ use crate::error::GpuError;
 use crate::precision;
 use crate::renderer::Renderer;
 use fathom_core::frame::{Frame, NO_ID};
-use fathom_core::{Evaluator, Projection, Scene, Tape, V3};
+use fathom_core::shared::PREPASS_LEVELS;
+use fathom_core::{Camera, Evaluator, Projection, Scene, Tape, V3};
 use std::time::Instant;
 
 /// The projection's number in the shader's globals (`dims.z`).
@@ -32,6 +33,10 @@ pub struct RenderOptions {
     pub projection: Projection,
     /// Run the cone-marching prepass.
     pub prepass: bool,
+    /// Apply the scene's distance fog in the colour pass. A caller that reads the frame back
+    /// and runs the shared post effects (fathom-trace's `post::finish`, which fogs after SSAO
+    /// as the CPU tracer does) turns this off; the displayable texture wants it on.
+    pub fog: bool,
 }
 
 impl Default for RenderOptions {
@@ -41,6 +46,7 @@ impl Default for RenderOptions {
             height: 480,
             projection: Projection::Mono,
             prepass: true,
+            fog: true,
         }
     }
 }
@@ -71,21 +77,106 @@ impl RenderStats {
     }
 }
 
+/// The uniform block of the render passes: `struct Globals` of trace.wgsl, field for field (a
+/// test checks names, offsets and sizes against naga's layout of the WGSL declaration).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Globals {
-    v: [[f32; 4]; 11],
-    dims: [u32; 4],
-    dims2: [u32; 4],
-    lights: [[f32; 4]; 16],
+pub(crate) struct Globals {
+    /// Eye position, high f32 part; w: pixel angle (footprint per unit distance).
+    pub eye_hi: [f32; 4],
+    /// Eye position, low f32 part; w: tan(fov / 2).
+    pub eye_lo: [f32; 4],
+    /// w: t_max.
+    pub forward: [f32; 4],
+    /// w: eps_slope (0.5 * pixel angle * pixel_epsilon).
+    pub right: [f32; 4],
+    /// w: t_start (distance bound at the eye).
+    pub up: [f32; 4],
+    /// w: ambient.
+    pub sky_top: [f32; 4],
+    /// w: AO strength.
+    pub sky_bottom: [f32; 4],
+    /// w: AO range.
+    pub pal_a: [f32; 4],
+    /// w: shadow softness.
+    pub pal_b: [f32; 4],
+    /// w: fog density (0: no fog in the shader).
+    pub pal_c: [f32; 4],
+    /// w: eye separation (stereo).
+    pub pal_d: [f32; 4],
+    /// View width, view height, projection (0 mono, 1 side-by-side, 2 ODS), max steps.
+    pub dims: [u32; 4],
+    /// Lights, materials, eyes, prepass on.
+    pub dims2: [u32; 4],
+    pub lights: [GpuLight; 8],
 }
 
+/// `struct Light` of trace.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GPx {
-    cd: [f32; 4],
-    n: [f32; 4],
-    misc: [u32; 4],
+pub(crate) struct GpuLight {
+    /// Unit direction towards the light; w = 1 when it casts shadows.
+    pub dir: [f32; 4],
+    /// Colour times intensity.
+    pub colour: [f32; 4],
+}
+
+/// One pixel of the G-buffer: `struct GPx` of trace.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct GPx {
+    /// Linear colour, depth (-1 = miss).
+    pub cd: [f32; 4],
+    /// Normal, 0.
+    pub n: [f32; 4],
+    /// Material id, steps, hit, 0.
+    pub misc: [u32; 4],
+}
+
+/// A Rust mirror of a WGSL struct: its name, size, and (name, byte offset, byte size) of every
+/// field in declaration order.
+#[cfg(test)]
+pub(crate) type Layout = (&'static str, usize, Vec<(&'static str, usize, usize)>);
+
+/// The layouts of the Rust mirrors of the WGSL structs, for the layout test.
+#[cfg(test)]
+pub(crate) fn rust_layouts() -> Vec<Layout> {
+    macro_rules! layout {
+        ($t:ty { $($f:ident: $ft:ty),* $(,)? }) => {
+            (
+                stringify!($t),
+                std::mem::size_of::<$t>(),
+                vec![$((stringify!($f), std::mem::offset_of!($t, $f), std::mem::size_of::<$ft>())),*],
+            )
+        };
+    }
+    vec![
+        layout!(Globals {
+            eye_hi: [f32; 4],
+            eye_lo: [f32; 4],
+            forward: [f32; 4],
+            right: [f32; 4],
+            up: [f32; 4],
+            sky_top: [f32; 4],
+            sky_bottom: [f32; 4],
+            pal_a: [f32; 4],
+            pal_b: [f32; 4],
+            pal_c: [f32; 4],
+            pal_d: [f32; 4],
+            dims: [u32; 4],
+            dims2: [u32; 4],
+            lights: [GpuLight; 8],
+        }),
+        layout!(GpuLight {
+            dir: [f32; 4],
+            colour: [f32; 4],
+        }),
+        layout!(GPx {
+            cd: [f32; 4],
+            n: [f32; 4],
+            misc: [u32; 4],
+        }),
+    ]
 }
 
 /// Buffers and the output texture for one output size (rebuilt only when it changes).
@@ -101,7 +192,7 @@ pub(crate) struct Targets {
 
 /// Cells of all prepass levels for a `w` x `h` view and `eyes` eyes.
 fn grid_cells(w: u32, h: u32, eyes: u32) -> u64 {
-    [8u32, 4, 2]
+    PREPASS_LEVELS
         .iter()
         .map(|b| (w.div_ceil(*b) * h.div_ceil(*b)) as u64 * eyes as u64)
         .sum()
@@ -192,7 +283,7 @@ impl Renderer {
         Ok(self.targets.as_ref().unwrap())
     }
 
-    /// Compiles `scene`, uploads its tape and renders it.
+    /// Compiles `scene`, uploads its tape and renders it from its own camera.
     pub fn render_scene(
         &mut self,
         scene: &Scene,
@@ -200,25 +291,92 @@ impl Renderer {
     ) -> Result<(Frame, RenderStats), GpuError> {
         let tape = Tape::compile(scene).map_err(|e| GpuError::Invalid(e.to_string()))?;
         self.set_tape(&tape)?;
-        self.render(scene, &tape, o)
+        self.render(scene, &tape, &scene.camera, o)
     }
 
     /// Renders the tape last given to [`Renderer::set_tape`] (`tape` must be that tape; it is
-    /// read on the CPU for the eye's distance bound) with `scene`'s camera, lights and settings.
+    /// read on the CPU for the eye's distance bound) from `camera`, with `scene`'s lights and
+    /// settings, and reads the G-buffer back into a [`Frame`].
     pub fn render(
         &mut self,
         scene: &Scene,
         tape: &Tape,
+        camera: &Camera,
         o: &RenderOptions,
     ) -> Result<(Frame, RenderStats), GpuError> {
         let start = Instant::now();
+        self.submit(scene, tape, camera, o)?;
+        let gpu_start = Instant::now();
+        // Generous: a software adapter compiles the pipelines on their first dispatch.
+        self.gpu.wait(900)?;
+        let ms_gpu = gpu_start.elapsed().as_secs_f64() * 1e3;
+        let t = self.targets.as_ref().expect("submit built the targets");
+        let gbytes = self.gpu.read_buffer(&t.gbuf, t.gbuf.size())?;
+        let cbytes = self.gpu.read_buffer(&t.counters, 16)?;
+        let px: &[GPx] = bytemuck::cast_slice(&gbytes);
+        let counts: &[u32] = bytemuck::cast_slice(&cbytes);
+        let (ow, oh) = o.projection.output_size(o.width, o.height);
+        let mut frame = Frame::new(ow, oh);
+        for (i, p) in px.iter().enumerate().take(frame.len()) {
+            frame.colour[i] = [p.cd[0], p.cd[1], p.cd[2]];
+            frame.steps[i] = p.misc[1];
+            if p.misc[2] == 1 {
+                frame.depth[i] = p.cd[3];
+                frame.normal[i] = [p.n[0], p.n[1], p.n[2]];
+                frame.id[i] = p.misc[0];
+            } else {
+                frame.id[i] = NO_ID;
+            }
+        }
+        let stats = RenderStats {
+            width: ow,
+            height: oh,
+            de_prepass: counts[0] as u64,
+            de_trace: counts[1] as u64,
+            de_shade: counts[2] as u64,
+            hits: frame.depth.iter().filter(|d| d.is_finite()).count() as u64,
+            ms_gpu,
+            ms_total: start.elapsed().as_secs_f64() * 1e3,
+        };
+        Ok((frame, stats))
+    }
+
+    /// Renders like [`Renderer::render`] but leaves the image on the device: the passes are
+    /// submitted and this returns at once, without waiting or reading anything back. The
+    /// tonemapped image is [`Renderer::output_texture`]; commands a window submits later on the
+    /// same queue (sampling it to present) run after these passes.
+    pub fn render_to_texture(
+        &mut self,
+        scene: &Scene,
+        tape: &Tape,
+        camera: &Camera,
+        o: &RenderOptions,
+    ) -> Result<&wgpu::Texture, GpuError> {
+        self.submit(scene, tape, camera, o)?;
+        Ok(&self
+            .targets
+            .as_ref()
+            .expect("submit built the targets")
+            .texture)
+    }
+
+    /// Checks the request, writes the globals and submits the passes.
+    fn submit(
+        &mut self,
+        scene: &Scene,
+        tape: &Tape,
+        camera: &Camera,
+        o: &RenderOptions,
+    ) -> Result<(), GpuError> {
         if o.width == 0 || o.height == 0 {
             return Err(GpuError::Invalid(format!(
                 "image size {}x{} is empty",
                 o.width, o.height
             )));
         }
-        o.projection.validate().map_err(GpuError::Invalid)?;
+        o.projection
+            .validate()
+            .map_err(|e| GpuError::Invalid(e.to_string()))?;
         let sep = o.projection.separation();
         let (ow, oh) = o.projection.output_size(o.width, o.height);
         let tex_max = self.gpu.limits.max_texture_dimension_2d;
@@ -229,12 +387,17 @@ impl Renderer {
                 limit: tex_max,
             });
         }
-        scene.validate().map_err(GpuError::Invalid)?;
+        scene
+            .validate()
+            .map_err(|e| GpuError::Invalid(e.to_string()))?;
+        camera
+            .validate()
+            .map_err(|e| GpuError::Invalid(e.to_string()))?;
         self.gpu.check_lost()?;
-        let cam = o.projection.frame(&scene.camera);
+        let cam = o.projection.frame(camera);
         let pixel_angle = o.projection.pixel_angle(&cam, o.width, o.height);
-        let footprint = pixel_angle * (scene.camera.target - scene.camera.eye).length();
-        let eye_dist = scene.camera.eye.length();
+        let footprint = pixel_angle * (camera.target - camera.eye).length();
+        let eye_dist = camera.eye.length();
         if precision::too_deep(footprint, eye_dist) {
             return Err(GpuError::TooDeep {
                 footprint,
@@ -264,27 +427,30 @@ impl Renderer {
         let (hi, lo) = split(e);
         let v3 = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         let c3 = |c: [f64; 3], w: f64| [c[0] as f32, c[1] as f32, c[2] as f32, w as f32];
-        let view_scale = (scene.camera.target - scene.camera.eye).length();
-        let mut lights = [[0f32; 4]; 16];
+        let view_scale = (camera.target - camera.eye).length();
+        let mut lights = [GpuLight {
+            dir: [0.0; 4],
+            colour: [0.0; 4],
+        }; 8];
         for (i, l) in scene.lights.iter().enumerate().take(8) {
             let d = l.direction.normalize();
-            lights[2 * i] = [d.x as f32, d.y as f32, d.z as f32, l.shadows as u32 as f32];
-            lights[2 * i + 1] = c3(l.colour.map(|c| c * l.intensity), 0.0);
+            lights[i] = GpuLight {
+                dir: [d.x as f32, d.y as f32, d.z as f32, l.shadows as u32 as f32],
+                colour: c3(l.colour.map(|c| c * l.intensity), 0.0),
+            };
         }
         let g = Globals {
-            v: [
-                [hi[0], hi[1], hi[2], pixel_angle as f32],
-                [lo[0], lo[1], lo[2], cam.tan_half_fov as f32],
-                v3(cam.forward, r.max_distance),
-                v3(cam.right, 0.5 * pixel_angle * r.pixel_epsilon),
-                [cam.up.x as f32, cam.up.y as f32, cam.up.z as f32, t_start],
-                c3(r.sky_top, r.ambient),
-                c3(r.sky_bottom, r.ao),
-                c3(r.palette[0], 0.05 * view_scale),
-                c3(r.palette[1], r.shadow_softness),
-                c3(r.palette[2], r.fog),
-                c3(r.palette[3], sep),
-            ],
+            eye_hi: [hi[0], hi[1], hi[2], pixel_angle as f32],
+            eye_lo: [lo[0], lo[1], lo[2], cam.tan_half_fov as f32],
+            forward: v3(cam.forward, r.max_distance),
+            right: v3(cam.right, 0.5 * pixel_angle * r.pixel_epsilon),
+            up: [cam.up.x as f32, cam.up.y as f32, cam.up.z as f32, t_start],
+            sky_top: c3(r.sky_top, r.ambient),
+            sky_bottom: c3(r.sky_bottom, r.ao),
+            pal_a: c3(r.palette[0], 0.05 * view_scale),
+            pal_b: c3(r.palette[1], r.shadow_softness),
+            pal_c: c3(r.palette[2], if o.fog { r.fog } else { 0.0 }),
+            pal_d: c3(r.palette[3], sep),
             dims: [o.width, o.height, mode(o.projection), r.max_steps],
             dims2: [
                 scene.lights.len().min(8) as u32,
@@ -309,7 +475,7 @@ impl Renderer {
             pass.set_bind_group(0, &self.tape_group, &[]);
             pass.set_bind_group(1, &t.group, &[]);
             if o.prepass {
-                for (l, b) in [8u32, 4, 2].iter().enumerate() {
+                for (l, b) in PREPASS_LEVELS.iter().enumerate() {
                     pass.set_pipeline(&self.pipes.prepass[l]);
                     let cw = o.width.div_ceil(*b);
                     let ch = o.height.div_ceil(*b) * eyes;
@@ -321,38 +487,8 @@ impl Renderer {
             pass.set_pipeline(&self.pipes.shade);
             pass.dispatch_workgroups(ow.div_ceil(8), oh.div_ceil(8), 1);
         }
-        let gpu_start = Instant::now();
         q.submit([enc.finish()]);
-        // Generous: a software adapter compiles the pipelines on their first dispatch.
-        self.gpu.wait(900)?;
-        let ms_gpu = gpu_start.elapsed().as_secs_f64() * 1e3;
-        let gbytes = self.gpu.read_buffer(&t.gbuf, t.gbuf.size())?;
-        let cbytes = self.gpu.read_buffer(&t.counters, 16)?;
-        let px: &[GPx] = bytemuck::cast_slice(&gbytes);
-        let counts: &[u32] = bytemuck::cast_slice(&cbytes);
-        let mut frame = Frame::new(ow, oh);
-        for (i, p) in px.iter().enumerate().take(frame.len()) {
-            frame.colour[i] = [p.cd[0], p.cd[1], p.cd[2]];
-            frame.steps[i] = p.misc[1];
-            if p.misc[2] == 1 {
-                frame.depth[i] = p.cd[3];
-                frame.normal[i] = [p.n[0], p.n[1], p.n[2]];
-                frame.id[i] = p.misc[0];
-            } else {
-                frame.id[i] = NO_ID;
-            }
-        }
-        let stats = RenderStats {
-            width: ow,
-            height: oh,
-            de_prepass: counts[0] as u64,
-            de_trace: counts[1] as u64,
-            de_shade: counts[2] as u64,
-            hits: frame.depth.iter().filter(|d| d.is_finite()).count() as u64,
-            ms_gpu,
-            ms_total: start.elapsed().as_secs_f64() * 1e3,
-        };
-        Ok((frame, stats))
+        Ok(())
     }
 
     /// The displayable image of the last render (8-bit sRGB), for a window to show.

@@ -176,7 +176,7 @@ pub fn dispatch() -> String {
 /// The whole WGSL program: common declarations, every family, the generated dispatch, the
 /// interpreter and the entry points.
 pub fn source() -> String {
-    let mut s = String::new();
+    let mut s = fathom_core::shared::wgsl_declarations();
     for part in [COMMON, PRIMITIVES_WGSL, FRACTALS_WGSL, TRANSFORMS_WGSL] {
         s += part;
         s += "\n";

@@ -17,6 +17,7 @@ fn opts(width: u32, height: u32) -> RenderOptions {
         height,
         projection: Projection::Mono,
         prepass: true,
+        fog: true,
     }
 }
 

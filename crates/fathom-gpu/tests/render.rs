@@ -28,6 +28,7 @@ fn mono(w: u32, h: u32) -> RenderOptions {
         height: h,
         projection: Projection::Mono,
         prepass: true,
+        fog: true,
     }
 }
 
@@ -72,7 +73,7 @@ fn scene_edits_build_no_shader_or_pipeline() {
     scene.root.shape.set("radius", &[0.5]).unwrap();
     tape.update_params(&scene).unwrap();
     r.set_tape(&tape).unwrap();
-    let (smaller, _) = r.render(&scene, &tape, &o).unwrap();
+    let (smaller, _) = r.render(&scene, &tape, &scene.camera, &o).unwrap();
     let hits = |f: &Frame| (0..f.len()).filter(|&i| f.is_hit(i)).count();
     assert!(hits(&smaller) < hits(&first), "the radius edit shows");
 

@@ -48,6 +48,7 @@ fn side_by_side_views_differ_by_the_expected_parallax() {
             eye_separation: sep,
         },
         prepass: true,
+        fog: true,
     };
     let (f, _) = r.render_scene(&scene, &o).unwrap();
     assert_eq!((f.width, f.height), (2 * w, h));
@@ -100,6 +101,7 @@ fn ods_frame_wraps_around_without_a_seam() {
             eye_separation: 0.065,
         },
         prepass: true,
+        fog: true,
     };
     let (f, _) = r.render_scene(&scene, &o).unwrap();
     assert_eq!((f.width, f.height), (w, 2 * h));
@@ -165,6 +167,7 @@ fn ods_frame_of_a_preset_matches_the_cpu_tracer() {
         height: h,
         projection,
         prepass: true,
+        fog: true,
     };
     let (g, _) = r.render_scene(&scene, &o).unwrap();
     let co = fathom_trace::Options {

@@ -4,8 +4,9 @@
 //!
 //! `cargo run --release -p fathom-svo --example render_bench -- mandelbulb 300 1e11 [threads]`
 
+use fathom_core::camera_path::path_preset;
+use fathom_svo::RootSpec;
 use fathom_svo::explorer::{Explorer, ExplorerConfig, Traversal};
-use fathom_svo::zoom;
 use std::time::Instant;
 
 fn main() {
@@ -19,7 +20,7 @@ fn main() {
         _ => Traversal::Neighbour,
     };
     let reps = 15;
-    let p = zoom::preset(name).unwrap_or_else(|e| {
+    let p = path_preset(name).unwrap_or_else(|e| {
         eprintln!("render_bench: {e}");
         std::process::exit(2)
     });
@@ -27,7 +28,7 @@ fn main() {
         threads,
         subdivide_ms: 0.0,
         min_subdivisions: 1700,
-        root: p.root,
+        root: RootSpec::from_cube(p.cube),
         traversal: trav,
         ..ExplorerConfig::default()
     };

@@ -13,6 +13,7 @@
 //! The skip node (the leaf containing the eye) is updated before rendering by following the
 //! neighbour link through the face the eye crossed, or one descent from the root.
 
+use crate::error::OctreeError;
 use crate::evict::unify;
 use crate::generate::{Children, Outcome, Shader, apply, eval_children, init_root};
 use crate::node::{NONE, REQUESTED, pack_rgb};
@@ -28,7 +29,7 @@ use serde::Serialize;
 use std::time::Instant;
 
 /// Which traversal renders the frames.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Traversal {
     /// Neighbour links from the skip node (scale independent).
@@ -38,7 +39,7 @@ pub enum Traversal {
 }
 
 /// Settings of an explorer. [`ExplorerConfig::validate`] gives the user-facing errors.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ExplorerConfig {
     /// Image width in pixels.
     pub width: u32,
@@ -93,40 +94,31 @@ impl Default for ExplorerConfig {
 
 impl ExplorerConfig {
     /// Checks every setting, with errors that name the option.
-    pub fn validate(&self) -> Result<(), String> {
-        if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
-            return Err(format!(
-                "image size {}x{} is out of range (1..=16384 per side)",
-                self.width, self.height
-            ));
+    pub fn validate(&self) -> Result<(), OctreeError> {
+        let (width, height) = (self.width, self.height);
+        if width == 0 || height == 0 || width > 16384 || height > 16384 {
+            return Err(OctreeError::Size { width, height });
         }
         if !(self.fidelity.is_finite() && (0.25..=16.0).contains(&self.fidelity)) {
-            return Err(format!(
-                "fidelity {} is out of range [0.25, 16] (pixels per voxel)",
-                self.fidelity
-            ));
+            return Err(OctreeError::Fidelity(self.fidelity));
         }
         if self.threads == 0 || self.threads > 256 {
-            return Err(format!("threads {} is out of range 1..=256", self.threads));
+            return Err(OctreeError::Threads(self.threads));
         }
         if self.brick_period == 0 || self.brick_period > 16 {
-            return Err("brick period must be in 1..=16 levels".into());
+            return Err(OctreeError::BrickPeriod(self.brick_period));
         }
         if self.unify_every == 0 {
-            return Err("unify-every must be at least 1 frame".into());
+            return Err(OctreeError::UnifyEvery);
         }
-        let min_mem = 1 << 20;
-        if self.max_memory < min_mem {
-            return Err(format!(
-                "max memory {} bytes is below the minimum of 1 MiB",
-                self.max_memory
-            ));
+        if self.max_memory < 1 << 20 {
+            return Err(OctreeError::Memory(self.max_memory));
         }
         if !(self.margin.is_finite() && (0.0..=1.0).contains(&self.margin)) {
-            return Err(format!("margin {} is out of range [0, 1]", self.margin));
+            return Err(OctreeError::Margin(self.margin));
         }
         if !(self.subdivide_ms.is_finite() && self.subdivide_ms >= 0.0) {
-            return Err("subdivision budget must be a non-negative number of ms".into());
+            return Err(OctreeError::SubdivideMs(self.subdivide_ms));
         }
         self.root.validate()
     }
@@ -245,14 +237,17 @@ pub struct Explorer {
 
 impl Explorer {
     /// An explorer of `scene` with one root voxel.
-    pub fn new(scene: &Scene, cfg: ExplorerConfig) -> Result<Explorer, String> {
+    pub fn new(scene: &Scene, cfg: ExplorerConfig) -> Result<Explorer, OctreeError> {
         cfg.validate()?;
         let shader = Shader::new(scene, cfg.margin)?;
         let max_nodes = cfg.max_memory / std::mem::size_of::<crate::node::Node>();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(cfg.threads)
             .build()
-            .map_err(|e| format!("cannot start {} threads: {e}", cfg.threads))?;
+            .map_err(|e| OctreeError::Pool {
+                threads: cfg.threads,
+                message: e.to_string(),
+            })?;
         let (root_min, root_size) = pool.install(|| cfg.root.resolve(&shader));
         let mut tree = Octree::new(root_min, root_size, cfg.brick_period, max_nodes);
         init_root(&mut tree, &shader);

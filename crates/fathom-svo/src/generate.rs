@@ -24,6 +24,7 @@ use crate::octree::{BoxU, Octree};
 use fathom_core::eval::Evaluator;
 use fathom_core::registry::{Family, Quality};
 use fathom_core::scene::Scene;
+use fathom_core::tape::CompileError;
 use fathom_core::{Tape, V3};
 use glam::DVec3;
 
@@ -59,8 +60,8 @@ pub fn is_bound(scene: &Scene) -> bool {
 
 impl Shader {
     /// Compiles `scene` into a shader.
-    pub fn new(scene: &Scene, margin: f64) -> Result<Shader, String> {
-        let tape = Tape::compile(scene).map_err(|e| e.to_string())?;
+    pub fn new(scene: &Scene, margin: f64) -> Result<Shader, CompileError> {
+        let tape = Tape::compile(scene)?;
         let light = scene
             .lights
             .first()

@@ -13,29 +13,29 @@
 //! - [`check`]: the link-integrity checker;
 //! - [`outline`]: silhouette agreement with a sphere tracer, image similarity;
 //! - [`explorer`]: one frame = render (read-only) -> subdivide -> unify; stats;
-//! - [`zoom`]: camera paths (point-of-recursion zooms, the tour) and the precision guard;
-//! - [`scenes`]: code-built scenes used by the presets and tests;
+//! - [`precision`]: the guard that stops a zoom at the limit of f64 precision;
 //! - [`stats`]: summaries of per-frame stats.
 
 // Loops over the three axes index several arrays at once.
 #![allow(clippy::needless_range_loop)]
 
 pub mod check;
+pub mod error;
 pub mod evict;
 pub mod explorer;
 pub mod generate;
 pub mod node;
 pub mod octree;
 pub mod outline;
+pub mod precision;
 pub mod root;
-pub mod scenes;
 pub mod stats;
 pub mod traverse;
-pub mod zoom;
 
+pub use error::OctreeError;
 pub use explorer::{Explorer, ExplorerConfig, FrameStats, SvoImage, Traversal};
 pub use octree::Octree;
-pub use root::RootSpec;
+pub use root::{MENGER_CUBE, RootSpec};
 
 #[cfg(test)]
 mod tests;

@@ -1,6 +1,7 @@
 //! Outline agreement with a sphere tracer and image similarity: the correctness experiments
 //! of the evaluation (silhouette IoU, false negatives, strict self-similarity).
 
+use crate::error::OctreeError;
 use crate::explorer::{Explorer, ExplorerConfig, SvoImage, Traversal};
 use fathom_core::eval::Evaluator;
 use fathom_core::scene::Scene;
@@ -14,8 +15,8 @@ pub fn trace_mask(
     w: u32,
     h: u32,
     eps: f64,
-) -> Result<Vec<bool>, String> {
-    let tape = Tape::compile(scene).map_err(|e| e.to_string())?;
+) -> Result<Vec<bool>, OctreeError> {
+    let tape = Tape::compile(scene)?;
     let f = cam.frame();
     let pa = f.pixel_angle(h);
     let mut ev = Evaluator::<f64>::new();
@@ -63,7 +64,7 @@ pub fn agreement(
     cam: &Camera,
     mut cfg: ExplorerConfig,
     eps: f64,
-) -> Result<Agreement, String> {
+) -> Result<Agreement, OctreeError> {
     cfg.traversal = Traversal::Neighbour;
     let (w, h) = (cfg.width, cfg.height);
     let mut ex = Explorer::new(scene, cfg)?;

@@ -18,6 +18,29 @@ use rayon::prelude::*;
 /// Levels of the fitting search: cells of `2 * half / 2^FIT_LEVELS`.
 pub const FIT_LEVELS: u32 = 7;
 
+/// The Menger sponge's own cube, `[-1, 1]^3`, as the root of its zooms: exact, so the root's
+/// faces are the sponge's faces and a zoom into the corner targets a corner of the root. A
+/// fitted root only reaches about +-1.016 (one search cell of padding), which shifts every
+/// voxel boundary off the sponge's faces and costs many more nodes per ray.
+pub const MENGER_CUBE: RootSpec = RootSpec::Cube {
+    centre: DVec3::ZERO,
+    half: 1.0,
+};
+
+impl RootSpec {
+    /// The exact cube when the scene has one (see [`MENGER_CUBE`] for why it matters), else
+    /// the fitted default.
+    pub fn from_cube(cube: Option<fathom_core::camera_path::ExactCube>) -> RootSpec {
+        match cube {
+            Some(c) => RootSpec::Cube {
+                centre: c.centre,
+                half: c.half,
+            },
+            None => RootSpec::default(),
+        }
+    }
+}
+
 /// How the root cube is chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RootSpec {
@@ -51,13 +74,13 @@ impl RootSpec {
     }
 
     /// Checks that the spec is a finite cube with a positive side.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), crate::error::OctreeError> {
         let (c, h) = match *self {
             RootSpec::Fit { half } => (DVec3::ZERO, half),
             RootSpec::Cube { centre, half } => (centre, half),
         };
         if !(h.is_finite() && h > 0.0 && c.is_finite()) {
-            return Err("the root cube must be finite with a positive side".into());
+            return Err(crate::error::OctreeError::Root);
         }
         Ok(())
     }
@@ -135,19 +158,18 @@ pub fn fit_bounds(sh: &Shader, half: f64, levels: u32) -> Option<(DVec3, DVec3)>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenes;
 
     #[test]
     fn fitted_roots_contain_the_scene_and_are_tight() {
         // Sphere of radius 1: the fitted cube contains [-1, 1]^3 and is at most a few search
         // cells larger.
-        let sh = Shader::new(&scenes::sphere(1.0), 0.01).unwrap();
+        let sh = Shader::new(&fathom_core::scenes::sphere(1.0), 0.01).unwrap();
         let (min, size) = RootSpec::Fit { half: 4.0 }.resolve(&sh);
         assert!(min.max_element() <= -1.0 && (min + DVec3::splat(size)).min_element() >= 1.0);
         let cell = 8.0 / 128.0;
         assert!(size <= 2.0 + 4.0 * cell, "root side {size}");
         // The Menger sponge: contains [-1, 1]^3, not exactly (the grid pads by a cell).
-        let sh = Shader::new(&scenes::menger(6), 0.01).unwrap();
+        let sh = Shader::new(&fathom_core::scenes::menger(6), 0.01).unwrap();
         let (min, size) = RootSpec::Fit { half: 2.0 }.resolve(&sh);
         assert!(min.max_element() <= -1.0 && (min + DVec3::splat(size)).min_element() >= 1.0);
         assert!(size < 2.2, "root side {size}");

@@ -4,10 +4,11 @@
 
 use crate::check::check;
 use crate::explorer::{Explorer, ExplorerConfig, SvoImage, Traversal};
-use crate::scenes;
-use crate::zoom;
+use crate::root::{MENGER_CUBE, RootSpec};
 use fathom_core::Camera;
+use fathom_core::camera_path::path_preset;
 use fathom_core::scene::Scene;
+use fathom_core::scenes;
 use glam::DVec3;
 
 fn cfg(w: u32, h: u32) -> ExplorerConfig {
@@ -52,9 +53,9 @@ fn neighbour_and_kdrestart_give_identical_images() {
     // The exact Menger root: the eye of the corner view is outside it, so neighbour rays
     // enter from the previous ray's entry node.
     let mut c = cfg(96, 72);
-    c.root = zoom::MENGER_CUBE;
+    c.root = MENGER_CUBE;
     let mut ex = Explorer::new(&scenes::menger(8), c).unwrap();
-    let cam = zoom::preset("menger").unwrap().camera(30, 100, 1e4);
+    let cam = path_preset("menger").unwrap().camera(30, 100, 1e4);
     for _ in 0..2 {
         ex.settle(&cam, 60);
         let kd = render_with(&mut ex, &cam, Traversal::KdRestart);
@@ -184,7 +185,7 @@ fn stress_camera_moves_subdivision_and_eviction_without_dangling_links_or_tears(
     c.max_memory = 1 << 20; // ~23k nodes: eviction is forced by the budget too
     c.min_subdivisions = 16;
     c.subdivide_ms = 0.5;
-    let p = zoom::preset("menger").unwrap();
+    let p = path_preset("menger").unwrap();
     let mut ex = Explorer::new(&p.scene, c).unwrap();
     let frames = 2000;
     let mut rng = 0x2545_f491_4f6c_dd1du64;
@@ -227,6 +228,7 @@ fn bad_settings_are_refused_with_clear_errors() {
         Explorer::new(&s, c.clone())
             .err()
             .unwrap()
+            .to_string()
             .contains("fidelity")
     );
     c.fidelity = 1.0;
@@ -235,11 +237,15 @@ fn bad_settings_are_refused_with_clear_errors() {
         Explorer::new(&s, c.clone())
             .err()
             .unwrap()
+            .to_string()
             .contains("max memory")
     );
     c.max_memory = 1 << 24;
     c.width = 0;
-    assert!(Explorer::new(&s, c).err().unwrap().contains("image size"));
+    assert!(matches!(
+        Explorer::new(&s, c).err().unwrap(),
+        crate::OctreeError::Size { .. }
+    ));
 }
 
 #[test]
@@ -287,13 +293,13 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
     // far more than a voxel: voxels whose centre is outside must still be full when a corner
     // is inside, and rays at voxel edges must not bounce between two leaves. Every pixel's
     // depth must match a careful tracer within 2 % (both traversals, identical images).
-    let p = zoom::preset("mandelbulb").unwrap();
+    let p = path_preset("mandelbulb").unwrap();
     let tape = fathom_core::Tape::compile(&p.scene).unwrap();
     let (w, h) = (96u32, 72u32);
     for frame in [200, 299] {
         let cam = p.camera(frame, 300, 1e11);
         let mut c = cfg(w, h);
-        c.root = p.root;
+        c.root = RootSpec::from_cube(p.cube);
         let mut ex = Explorer::new(&p.scene, c).unwrap();
         ex.settle(&cam, 300);
         let kd = render_with(&mut ex, &cam, Traversal::KdRestart);

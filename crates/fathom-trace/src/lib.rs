@@ -16,7 +16,7 @@ pub mod shade;
 pub mod stereo;
 pub mod tracer;
 
-pub use render::{Options, Stats, render};
+pub use render::{Hooks, Options, OptionsError, Stats, TraceError, render, render_tape};
 pub use tracer::Method;
 
 #[cfg(test)]

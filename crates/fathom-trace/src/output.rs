@@ -7,27 +7,51 @@ use crate::post;
 use fathom_core::frame::Frame;
 use std::fs::File;
 use std::io::BufWriter;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// Opens `path` for writing now, so an unwritable path fails before any rendering.
-pub fn open_output(path: &Path) -> Result<File, String> {
-    File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))
+/// Why an output file could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// The file could not be created (missing directory, no permission, ...).
+    #[error("cannot write {}: {source}", path.display())]
+    Create {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// Encoding or writing the image failed (disk full, ...).
+    #[error("cannot write {}: {message}", path.display())]
+    Write { path: PathBuf, message: String },
 }
 
-fn write_png(file: File, path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), String> {
+fn write_error(path: &Path, e: impl std::fmt::Display) -> OutputError {
+    OutputError::Write {
+        path: path.into(),
+        message: e.to_string(),
+    }
+}
+
+/// Opens `path` for writing now, so an unwritable path fails before any rendering.
+pub fn open_output(path: &Path) -> Result<File, OutputError> {
+    File::create(path).map_err(|source| OutputError::Create {
+        path: path.into(),
+        source,
+    })
+}
+
+fn write_png(file: File, path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), OutputError> {
     use image::ImageEncoder;
     let enc = image::codecs::png::PngEncoder::new(BufWriter::new(file));
     enc.write_image(rgb, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        .map_err(|e| write_error(path, e))
 }
 
 /// The tonemapped, gamma-encoded colour image as PNG.
-pub fn save_colour(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
+pub fn save_colour(frame: &Frame, file: File, path: &Path) -> Result<(), OutputError> {
     write_png(file, path, frame.width, frame.height, &post::to_rgb8(frame))
 }
 
 /// White where the primary ray hit, black elsewhere (PNG).
-pub fn save_mask(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
+pub fn save_mask(frame: &Frame, file: File, path: &Path) -> Result<(), OutputError> {
     let rgb: Vec<u8> = (0..frame.len())
         .flat_map(|i| [if frame.is_hit(i) { 255 } else { 0 }; 3])
         .collect();
@@ -36,7 +60,7 @@ pub fn save_mask(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
 
 /// Heat map of distance evaluations per pixel (black, red, yellow, white up to the frame's
 /// maximum), PNG.
-pub fn save_steps(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
+pub fn save_steps(frame: &Frame, file: File, path: &Path) -> Result<(), OutputError> {
     let max = frame.steps.iter().copied().max().unwrap_or(0).max(1) as f32;
     let rgb: Vec<u8> = frame
         .steps
@@ -53,7 +77,7 @@ pub fn save_steps(frame: &Frame, file: File, path: &Path) -> Result<(), String> 
 /// the coverage (1 where the ray hit, 0 where it missed). Misses carry `far` (the scene's
 /// maximum distance) in RGB so no infinity reaches the file, and alpha 0 tells a compositor
 /// they are background, not a surface at `far`.
-pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<(), String> {
+pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<(), OutputError> {
     let data: Vec<f32> = (0..frame.len())
         .flat_map(|i| {
             let d = frame.depth[i];
@@ -65,11 +89,11 @@ pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<()
         })
         .collect();
     let img = image::Rgba32FImage::from_raw(frame.width, frame.height, data)
-        .ok_or("depth buffer has the wrong size")?;
+        .ok_or_else(|| write_error(path, "the depth buffer has the wrong size"))?;
     let mut w = BufWriter::new(file);
     image::DynamicImage::ImageRgba32F(img)
         .write_to(&mut w, image::ImageFormat::OpenExr)
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        .map_err(|e| write_error(path, e))
 }
 
 /// The tonemapped, gamma-encoded colour image as a 16-bit PNG (the same curve as the 8-bit
@@ -380,7 +404,7 @@ mod tests {
             .unwrap();
         let layer = &img.layer_data[0];
         let get = |name: &str| {
-            let c = layer.channel_data.list.iter().find(|c| c.name == name).unwrap();
+            let c = layer.channel_data.list.iter().find(|c| c.name == *name).unwrap();
             c.sample_data.values_as_f32().collect::<Vec<f32>>()
         };
         assert_eq!(get("R"), [0.25, 0.0]);
@@ -388,7 +412,7 @@ mod tests {
         assert_eq!(get("A"), [1.0, 0.0]);
         assert_eq!(get("Z"), [3.5, 20.0]);
         assert_eq!(get("normal.Y"), [1.0, 0.0]);
-        let id = layer.channel_data.list.iter().find(|c| c.name == "id").unwrap();
+        let id = layer.channel_data.list.iter().find(|c| c.name == *"id").unwrap();
         assert!(matches!(&id.sample_data, FlatSamples::U32(v) if v[..] == [7, u32::MAX]));
         std::fs::remove_dir_all(&dir).ok();
     }

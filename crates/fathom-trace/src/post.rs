@@ -1,8 +1,52 @@
 //! Post effects on a [`Frame`]: distance fog, screen-space ambient occlusion, supersampling
-//! reduction, NaN scrubbing and tonemapping to 8-bit sRGB. They read only the frame, so any
-//! renderer that fills one (the octree and GPU renderers too) can reuse them.
+//! reduction, NaN scrubbing and tonemapping to 8-bit sRGB. They read only the frame, so every
+//! renderer that fills one (the octree and GPU renderers too) shares them, and
+//! [`finish_view`] is the one place that says which run, in what order, on each eye's view.
 
-use fathom_core::frame::{Frame, NO_ID};
+use fathom_core::frame::{Frame, NO_ID, Rect};
+
+/// How far (in samples) SSAO looks from a pixel: a region render traces this much more so
+/// its border pixels see the same neighbours as in the whole image.
+pub const SSAO_REACH: u32 = 6;
+
+/// The post effects of one view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PostParams {
+    /// SSAO strength (0: none; callers pass 0 for ODS and geometry-only renders).
+    pub ssao: f32,
+    /// Angular size of a sample at the view's centre (radians), for SSAO.
+    pub pixel_angle: f32,
+    /// Fog density per world unit (0: none).
+    pub fog: f32,
+    /// Fog colour, linear RGB.
+    pub fog_colour: [f32; 3],
+    /// Samples per pixel along each axis.
+    pub supersample: u32,
+}
+
+/// Finishes one eye's view: `frame` holds the samples of `traced` (a rectangle of the view's
+/// sample grid), of which the pixels of `keep` (inside `traced`, a multiple of the supersampling
+/// on every side) are wanted. Runs SSAO, then fog (so fog veils the occlusion, as in the
+/// air), crops to `keep`, averages the supersamples and scrubs NaNs. Every renderer's frames go
+/// through here.
+pub fn finish_view(mut frame: Frame, traced: Rect, keep: Rect, p: &PostParams) -> Frame {
+    if p.ssao > 0.0 {
+        ssao(&mut frame, p.ssao, p.pixel_angle);
+    }
+    if p.fog > 0.0 {
+        fog(&mut frame, p.fog, p.fog_colour);
+    }
+    let mut f = if keep == traced {
+        frame
+    } else {
+        frame.crop(keep.relative_to(traced.x, traced.y))
+    };
+    if p.supersample > 1 {
+        f = downsample(&f, p.supersample);
+    }
+    sanitize(&mut f);
+    f
+}
 
 /// Exponential distance fog towards `colour` (linear RGB), `density` per world unit. Misses
 /// keep their sky.
@@ -42,7 +86,7 @@ pub fn ssao(frame: &mut Frame, strength: f32, pixel_angle: f32) {
             }
             let mut occ = 0f32;
             let mut n = 0f32;
-            for r in [2i64, 6] {
+            for r in [2i64, SSAO_REACH as i64] {
                 for (dx, dy) in dirs {
                     let (sx, sy) = (x + dx * r, y + dy * r);
                     if sx < 0 || sy < 0 || sx >= w || sy >= h {

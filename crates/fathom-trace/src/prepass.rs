@@ -14,19 +14,28 @@
 //! [`Projection::cone_base`] covering that spread.
 
 use crate::tracer::{MarchParams, march};
+use fathom_core::frame::Rect;
 use fathom_core::real::Real;
 use fathom_core::{CameraFrame, Evaluator, Projection, Tape, V3};
 use rayon::prelude::*;
 
-/// Block sizes of the prepass levels, coarsest first.
-pub const LEVELS: [u32; 3] = [8, 4, 2];
+/// Block sizes of the prepass levels, coarsest first (shared with the WGSL prepass).
+pub use fathom_core::shared::PREPASS_LEVELS as LEVELS;
 
-/// Safe start distances for one level: one per `block` x `block` cell of the image.
+/// Safe start distances for one level: one per `block` x `block` cell of the image, for the
+/// cells `x0 .. x0 + w` by `y0 .. y0 + h` of a level `full_w` x `full_h` cells large (all of
+/// them for a whole image; a region's prepass computes only the cells its pixels read).
 #[derive(Clone, Debug)]
 pub struct StartGrid {
     /// Cell size in pixels.
     pub block: u32,
-    /// Cells per row and per column.
+    /// Cells of the whole level per row and per column.
+    pub full_w: u32,
+    pub full_h: u32,
+    /// The first cell held.
+    pub x0: u32,
+    pub y0: u32,
+    /// Cells held per row and per column.
     pub w: u32,
     pub h: u32,
     /// Safe start distance per cell, row-major.
@@ -38,10 +47,29 @@ impl StartGrid {
     pub fn uniform(t: f32) -> Self {
         StartGrid {
             block: u32::MAX,
+            full_w: 1,
+            full_h: 1,
+            x0: 0,
+            y0: 0,
             w: 1,
             h: 1,
             t: vec![t],
         }
+    }
+
+    /// The cells (first x, first y, last x, last y; inclusive, in whole-level coordinates)
+    /// whose centres surround some point at pixel coordinates in `[px0, px1] x [py0, py1]`:
+    /// what [`StartGrid::start_at`] reads for points there.
+    fn cells_read(&self, px: (f64, f64), py: (f64, f64)) -> (u32, u32, u32, u32) {
+        let b = self.block as f64;
+        let c = |p: f64, n: u32| ((p / b - 0.5).floor() as i64).clamp(0, n as i64 - 1) as u32;
+        let c1 = |p: f64, n: u32| ((p / b - 0.5).floor() as i64 + 1).clamp(0, n as i64 - 1) as u32;
+        (
+            c(px.0, self.full_w),
+            c(py.0, self.full_h),
+            c1(px.1, self.full_w),
+            c1(py.1, self.full_h),
+        )
     }
 
     /// Safe start for the point at pixel coordinates (`px`, `py`) (pixel centres at +0.5): the
@@ -56,9 +84,9 @@ impl StartGrid {
         let mut m = f32::INFINITY;
         for dy in 0..2 {
             for dx in 0..2 {
-                let x = (fx + dx).clamp(0, self.w as i64 - 1) as usize;
-                let y = (fy + dy).clamp(0, self.h as i64 - 1) as usize;
-                m = m.min(self.t[y * self.w as usize + x]);
+                let x = (fx + dx).clamp(0, self.full_w as i64 - 1) as u32 - self.x0;
+                let y = (fy + dy).clamp(0, self.full_h as i64 - 1) as u32 - self.y0;
+                m = m.min(self.t[(y * self.w + x) as usize]);
             }
         }
         m
@@ -81,21 +109,51 @@ pub struct View<'a> {
     pub t_start: f32,
 }
 
-/// Runs every level; returns the finest grid and the distance evaluations spent.
-pub fn run<S: Real>(view: &View) -> (StartGrid, u64) {
+/// Runs every level for the pixels of `rect` (the view's sample coordinates); returns the
+/// finest grid (holding every cell those pixels read) and the distance evaluations spent.
+/// `cancelled` is checked between levels (a cancelled prepass returns what it has).
+pub fn run<S: Real>(view: &View, rect: Rect, cancelled: &dyn Fn() -> bool) -> (StartGrid, u64) {
+    // From the finest level out: the cells each level must hold so that the next finer level
+    // (or, for the finest, the pixels of `rect`) reads only cells that were computed.
+    let mut need = Vec::with_capacity(LEVELS.len());
+    let mut px = (rect.x as f64 + 0.5, (rect.right() - 1) as f64 + 0.5);
+    let mut py = (rect.y as f64 + 0.5, (rect.bottom() - 1) as f64 + 0.5);
+    for &block in LEVELS.iter().rev() {
+        let g = StartGrid {
+            block,
+            full_w: view.width.div_ceil(block),
+            full_h: view.height.div_ceil(block),
+            ..StartGrid::uniform(0.0)
+        };
+        let cells = g.cells_read(px, py);
+        need.push((block, cells));
+        // The finer level is marched from the centres of these cells.
+        let centre = |c: u32, size: u32| ((c * block) as f64 + 0.5 * block as f64).min(size as f64);
+        px = (centre(cells.0, view.width), centre(cells.2, view.width));
+        py = (centre(cells.1, view.height), centre(cells.3, view.height));
+    }
+    need.reverse();
     let mut grid = StartGrid::uniform(view.t_start);
     let mut evals = 0u64;
-    for &block in &LEVELS {
-        let (g, e) = level::<S>(view, block, &grid);
+    for (block, cells) in need {
+        if cancelled() {
+            break;
+        }
+        let (g, e) = level::<S>(view, block, cells, &grid);
         grid = g;
         evals += e;
     }
     (grid, evals)
 }
 
-fn level<S: Real>(view: &View, block: u32, coarser: &StartGrid) -> (StartGrid, u64) {
-    let w = view.width.div_ceil(block);
-    let h = view.height.div_ceil(block);
+fn level<S: Real>(
+    view: &View,
+    block: u32,
+    (cx0, cy0, cx1, cy1): (u32, u32, u32, u32),
+    coarser: &StartGrid,
+) -> (StartGrid, u64) {
+    let w = cx1 - cx0 + 1;
+    let h = cy1 - cy0 + 1;
     let n = w as usize * h as usize;
     let slope = 0.75 * block as f64 * view.pixel_angle;
     let params = MarchParams {
@@ -124,7 +182,7 @@ fn level<S: Real>(view: &View, block: u32, coarser: &StartGrid) -> (StartGrid, u
                 let mut live = [0f64; 8];
                 for l in 0..S::LANES {
                     let k = (first + l.min(lanes.len() - 1)) as u32;
-                    let (cx, cy) = (k % w, k / w);
+                    let (cx, cy) = (cx0 + k % w, cy0 + k / w);
                     let px = ((cx * block) as f64 + 0.5 * block as f64).min(view.width as f64);
                     let py = ((cy * block) as f64 + 0.5 * block as f64).min(view.height as f64);
                     let (off, d) =
@@ -159,5 +217,15 @@ fn level<S: Real>(view: &View, block: u32, coarser: &StartGrid) -> (StartGrid, u
             evals
         })
         .sum();
-    (StartGrid { block, w, h, t }, evals)
+    let grid = StartGrid {
+        block,
+        full_w: view.width.div_ceil(block),
+        full_h: view.height.div_ceil(block),
+        x0: cx0,
+        y0: cy0,
+        w,
+        h,
+        t,
+    };
+    (grid, evals)
 }

@@ -1,9 +1,21 @@
-//! One frame: validation, the prepass, primary rays over tiles in parallel, shading, post.
+//! One frame, or one region of it: validation, the prepass, primary rays over tiles in
+//! parallel, shading, and the shared post effects ([`crate::post::finish_view`]).
 //!
 //! Tiles of 16x16 pixels are spread over rayon's pool, each task with its own evaluator. Inside
 //! a tile, rays go in packets of eight (4x2 pixel blocks) on the f32 SIMD path. Every lane's
 //! result depends only on its own ray, and per-tile results are written back in tile order, so
 //! the image does not depend on the number of threads.
+//!
+//! **Regions.** A region (a rectangle of the output image) traces only the tiles it needs:
+//! its pixels, grown by the reach of SSAO when SSAO is on, rounded out to whole tiles of the
+//! full image; the prepass computes only the cells those pixels read, at the positions the
+//! full image would. Every value a region pixel depends on is therefore computed exactly as
+//! in the whole render: a region is bit-identical to the same pixels of the whole image.
+//!
+//! **Cancellation and progress.** [`Hooks::cancel`] is checked before every tile (and between
+//! prepass levels and eyes): once it is set the remaining tiles are skipped and the render
+//! returns [`TraceError::Cancelled`] within about one tile's time per thread.
+//! [`Hooks::progress`] is called as tiles finish.
 //!
 //! Stereo ([`Projection`]): each eye is rendered as a view of its own (prepass, tiles, post
 //! effects), then the views are laid out side by side or top/bottom (`crate::stereo`). SSAO is
@@ -14,15 +26,18 @@
 //! target falls below `DEEP_FOOTPRINT` times the camera's distance from the origin (or 1), the
 //! whole frame switches to the f64 path (one ray per packet; slow but exact).
 
-use crate::post;
+use crate::post::{self, PostParams};
 use crate::prepass::{self, StartGrid, View};
 use crate::shade::{Shaded, Shading, shade};
 use crate::tracer::{MarchParams, Method, OMEGA, march};
-use fathom_core::frame::{Frame, NO_ID};
+use fathom_core::camera::{CameraError, ProjectionError};
+use fathom_core::frame::{Frame, NO_ID, Rect};
 use fathom_core::real::{Mask, Real};
-use fathom_core::{Evaluator, F32x8, Projection, Scene, Tape, V3};
+use fathom_core::scene::SceneError;
+use fathom_core::tape::CompileError;
+use fathom_core::{Camera, Evaluator, F32x8, Projection, Scene, Tape, V3};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Widest or tallest image, in pixels.
@@ -37,7 +52,7 @@ pub const TILE: u32 = 16;
 pub const DEEP_FOOTPRINT: f64 = 1e-5;
 
 /// How to render.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Options {
     pub width: u32,
     pub height: u32,
@@ -69,44 +84,116 @@ impl Default for Options {
     }
 }
 
+/// Why render options were refused (before anything is allocated).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum OptionsError {
+    #[error("image size {width}x{height} is empty")]
+    Empty { width: u32, height: u32 },
+    #[error(transparent)]
+    Projection(#[from] ProjectionError),
+    #[error("image size {width}x{height} exceeds the limit of {MAX_SIDE} pixels per side")]
+    TooLarge { width: u32, height: u32 },
+    #[error(
+        "stereo output size {out_width}x{out_height} ({width}x{height} per eye) exceeds the limit of {MAX_SIDE} pixels per side"
+    )]
+    StereoTooLarge {
+        out_width: u32,
+        out_height: u32,
+        width: u32,
+        height: u32,
+    },
+    #[error("supersample = {0} is out of range [1, {MAX_SUPERSAMPLE}]")]
+    Supersample(u32),
+    #[error(
+        "{out_width}x{out_height} with {ss}x{ss} supersampling is {samples} samples; the limit is {MAX_PIXELS}"
+    )]
+    TooManySamples {
+        out_width: u32,
+        out_height: u32,
+        ss: u32,
+        samples: u64,
+    },
+    #[error("ssao = {0} is out of range [0, 4]")]
+    Ssao(f32),
+    #[error(
+        "region {}x{} at ({}, {}) is empty or not inside the {width}x{height} image",
+        region.width, region.height, region.x, region.y
+    )]
+    Region {
+        region: Rect,
+        width: u32,
+        height: u32,
+    },
+}
+
+/// Why a render failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TraceError {
+    #[error(transparent)]
+    Options(#[from] OptionsError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    #[error(transparent)]
+    Compile(#[from] CompileError),
+    /// [`Hooks::cancel`] was set before the frame was finished.
+    #[error("the render was cancelled")]
+    Cancelled,
+}
+
 impl Options {
     /// Checks sizes and sample counts against the documented limits, before any allocation.
-    pub fn validate(&self) -> Result<(), String> {
-        if self.width == 0 || self.height == 0 {
-            return Err(format!(
-                "image size {}x{} is empty",
-                self.width, self.height
-            ));
+    pub fn validate(&self) -> Result<(), OptionsError> {
+        let (width, height) = (self.width, self.height);
+        if width == 0 || height == 0 {
+            return Err(OptionsError::Empty { width, height });
         }
         self.projection.validate()?;
-        if self.width > MAX_SIDE || self.height > MAX_SIDE {
-            return Err(format!(
-                "image size {}x{} exceeds the limit of {MAX_SIDE} pixels per side",
-                self.width, self.height
-            ));
+        if width > MAX_SIDE || height > MAX_SIDE {
+            return Err(OptionsError::TooLarge { width, height });
         }
-        let (ow, oh) = self.projection.output_size(self.width, self.height);
+        let (ow, oh) = self.output_size();
         if ow > MAX_SIDE || oh > MAX_SIDE {
-            return Err(format!(
-                "stereo output size {ow}x{oh} ({}x{} per eye) exceeds the limit of {MAX_SIDE} pixels per side",
-                self.width, self.height
-            ));
+            return Err(OptionsError::StereoTooLarge {
+                out_width: ow,
+                out_height: oh,
+                width,
+                height,
+            });
         }
         if !(1..=MAX_SUPERSAMPLE).contains(&self.supersample) {
-            return Err(format!(
-                "supersample = {} is out of range [1, {MAX_SUPERSAMPLE}]",
-                self.supersample
-            ));
+            return Err(OptionsError::Supersample(self.supersample));
         }
-        let px = ow as u64 * oh as u64 * (self.supersample as u64).pow(2);
-        if px > MAX_PIXELS {
-            return Err(format!(
-                "{ow}x{oh} with {}x{} supersampling is {px} samples; the limit is {MAX_PIXELS}",
-                self.supersample, self.supersample
-            ));
+        let samples = ow as u64 * oh as u64 * (self.supersample as u64).pow(2);
+        if samples > MAX_PIXELS {
+            return Err(OptionsError::TooManySamples {
+                out_width: ow,
+                out_height: oh,
+                ss: self.supersample,
+                samples,
+            });
         }
         if !(self.ssao.is_finite() && (0.0..=4.0).contains(&self.ssao)) {
-            return Err(format!("ssao = {} is out of range [0, 4]", self.ssao));
+            return Err(OptionsError::Ssao(self.ssao));
+        }
+        Ok(())
+    }
+
+    /// Size of the output image (both eyes laid out for stereo).
+    pub fn output_size(&self) -> (u32, u32) {
+        self.projection.output_size(self.width, self.height)
+    }
+
+    /// Checks that `region` is a non-empty rectangle of the output image.
+    pub fn check_region(&self, region: Rect) -> Result<(), OptionsError> {
+        let (width, height) = self.output_size();
+        if region.is_empty() || !region.fits(width, height) {
+            return Err(OptionsError::Region {
+                region,
+                width,
+                height,
+            });
         }
         Ok(())
     }
@@ -115,10 +202,12 @@ impl Options {
 /// Counters and timings of one render. Sums are integers, so they do not depend on threads.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stats {
+    /// Size of the frame returned (the region, when one was asked for).
     pub width: u32,
     pub height: u32,
     /// Whether the f64 (deep zoom) path ran.
     pub deep: bool,
+    /// Primary rays traced (samples; with a region, also its margin).
     pub primary_rays: u64,
     /// Shadow rays (one per lit hit and shadowing light).
     pub shadow_rays: u64,
@@ -153,9 +242,35 @@ impl Stats {
     }
 }
 
+fn no_progress(_: usize, _: usize) {}
+
+/// Cancellation and progress of one render.
+#[derive(Clone, Copy)]
+pub struct Hooks<'a> {
+    /// Set (from any thread) to abandon the render.
+    pub cancel: Option<&'a AtomicBool>,
+    /// `progress(done, total)` as tiles finish (from worker threads).
+    pub progress: &'a (dyn Fn(usize, usize) + Sync),
+}
+
+impl Hooks<'static> {
+    /// No cancellation, no progress reports.
+    pub const NONE: Hooks<'static> = Hooks {
+        cancel: None,
+        progress: &no_progress,
+    };
+}
+
+impl Hooks<'_> {
+    fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
+
 struct Ctx<'a> {
     tape: &'a Tape,
     scene: &'a Scene,
+    camera: &'a Camera,
     cam: fathom_core::CameraFrame,
     projection: Projection,
     /// Which view of the projection (0 = left eye).
@@ -167,20 +282,45 @@ struct Ctx<'a> {
     opts: &'a Options,
 }
 
-/// Renders `scene`. `progress(done, total)` is called as tiles finish (from worker threads).
+/// Renders `scene` from its own camera: compiles the tape and renders the whole image.
+/// `progress(done, total)` is called as tiles finish (from worker threads).
 pub fn render(
     scene: &Scene,
     opts: &Options,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<(Frame, Stats), String> {
-    let start = Instant::now();
+) -> Result<(Frame, Stats), TraceError> {
     opts.validate()?;
     scene.validate()?;
-    let tape = Tape::compile(scene).map_err(|e| e.to_string())?;
+    let tape = Tape::compile(scene)?;
+    let hooks = Hooks {
+        cancel: None,
+        progress,
+    };
+    render_tape(&tape, scene, &scene.camera, opts, None, hooks)
+}
+
+/// Renders the compiled `tape` (of `scene`, whose lights and render settings are used) from
+/// `camera`: the whole output image, or only `region` of it (bit-identical to the same pixels
+/// of the whole image). Post effects (SSAO, fog, supersampling, NaN scrubbing) are applied.
+pub fn render_tape(
+    tape: &Tape,
+    scene: &Scene,
+    camera: &Camera,
+    opts: &Options,
+    region: Option<Rect>,
+    hooks: Hooks,
+) -> Result<(Frame, Stats), TraceError> {
+    let start = Instant::now();
+    opts.validate()?;
+    camera.validate()?;
+    let (ow, oh) = opts.output_size();
+    let region = region.unwrap_or(Rect::full(ow, oh));
+    opts.check_region(region)?;
     let ss = opts.supersample;
-    let (w, h) = (opts.width * ss, opts.height * ss);
+    let (vw, vh) = (opts.width, opts.height);
+    let (w, h) = (vw * ss, vh * ss);
     let projection = opts.projection;
-    let cam = projection.frame(&scene.camera);
+    let cam = projection.frame(camera);
     let pixel_angle = projection.pixel_angle(&cam, w, h);
     let r = &scene.render;
     let params = MarchParams {
@@ -195,15 +335,61 @@ pub fn render(
             Method::Enhanced => OMEGA,
         },
     };
-    let footprint = pixel_angle * (scene.camera.target - scene.camera.eye).length();
-    let deep = footprint < DEEP_FOOTPRINT * scene.camera.eye.length().max(1.0);
-    let eyes = projection.eyes();
-    let mut views = Vec::with_capacity(eyes as usize);
+    let footprint = pixel_angle * (camera.target - camera.eye).length();
+    let deep = footprint < DEEP_FOOTPRINT * camera.eye.length().max(1.0);
+    let ssao = opts.ssao > 0.0 && !opts.geometry_only && projection.screen_space();
+    let post = PostParams {
+        ssao: if ssao { opts.ssao } else { 0.0 },
+        pixel_angle: pixel_angle as f32,
+        fog: if opts.geometry_only {
+            0.0
+        } else {
+            r.fog as f32
+        },
+        fog_colour: r.sky_bottom.map(|c| c as f32),
+        supersample: ss,
+    };
+    // Per eye: the region's pixels in that eye's view, the samples they need, and the tiles
+    // that hold those samples (grown by the reach of SSAO).
+    let margin = if ssao { post::SSAO_REACH } else { 0 };
+    let mut jobs = Vec::new();
+    for eye in 0..projection.eyes() {
+        let (ex, ey) = projection.output_pixel(eye, 0, 0, vw, vh);
+        let area = Rect {
+            x: ex,
+            y: ey,
+            width: vw,
+            height: vh,
+        };
+        let part = region.intersect(&area);
+        if part.is_empty() {
+            continue;
+        }
+        let keep = part.relative_to(ex, ey).scaled(ss);
+        let traced = tiles_around(keep.grown(margin, w, h), w, h);
+        jobs.push((eye, part, keep, traced));
+    }
+    let total: usize = jobs
+        .iter()
+        .map(|j| (j.3.width.div_ceil(TILE) * j.3.height.div_ceil(TILE)) as usize)
+        .sum();
+    let done = AtomicUsize::new(0);
+    // One view that is the whole region (a mono render) is the output itself: no copy.
+    let whole_view = jobs.len() == 1 && jobs[0].1 == region;
+    let mut out = if whole_view {
+        Frame::new(0, 0)
+    } else {
+        Frame::new(region.width, region.height)
+    };
     let mut stats = Stats::default();
-    for eye in 0..eyes {
+    for (eye, part, keep, traced) in jobs {
+        if hooks.cancelled() {
+            return Err(TraceError::Cancelled);
+        }
         let ctx = Ctx {
-            tape: &tape,
+            tape,
             scene,
+            camera,
             cam,
             projection,
             eye,
@@ -213,35 +399,54 @@ pub fn render(
             params,
             opts,
         };
-        let progress = |done: usize, total: usize| {
-            progress(done + eye as usize * total, total * eyes as usize);
+        let view_hooks = TileCounter {
+            hooks: &hooks,
+            done: &done,
+            total,
         };
-        let (mut frame, s) = if deep {
-            render_with::<f64>(&ctx, &progress)
+        let (frame, s) = if deep {
+            trace_rect::<f64>(&ctx, traced, &view_hooks)
         } else {
-            render_with::<F32x8>(&ctx, &progress)
+            trace_rect::<F32x8>(&ctx, traced, &view_hooks)
         };
+        if hooks.cancelled() {
+            return Err(TraceError::Cancelled);
+        }
         stats.add(&s);
         let t_post = Instant::now();
-        if opts.ssao > 0.0 && !opts.geometry_only && projection.screen_space() {
-            post::ssao(&mut frame, opts.ssao, pixel_angle as f32);
-        }
-        if r.fog > 0.0 && !opts.geometry_only {
-            post::fog(&mut frame, r.fog as f32, r.sky_bottom.map(|c| c as f32));
-        }
-        if ss > 1 {
-            frame = post::downsample(&frame, ss);
-        }
-        post::sanitize(&mut frame);
+        let view = post::finish_view(frame, traced, keep, &post);
         stats.ms_post += t_post.elapsed().as_secs_f64() * 1e3;
-        views.push(frame);
+        if whole_view {
+            out = view;
+        } else {
+            out.paste(&view, part.x - region.x, part.y - region.y);
+        }
     }
     stats.deep = deep;
-    let frame = crate::stereo::assemble(projection, views);
-    stats.width = frame.width;
-    stats.height = frame.height;
+    stats.width = out.width;
+    stats.height = out.height;
     stats.ms_total = start.elapsed().as_secs_f64() * 1e3;
-    Ok((frame, stats))
+    Ok((out, stats))
+}
+
+/// `r` rounded out to whole tiles of a `w` x `h` view (tiles start at multiples of [`TILE`]).
+fn tiles_around(r: Rect, w: u32, h: u32) -> Rect {
+    let (x0, y0) = (r.x / TILE * TILE, r.y / TILE * TILE);
+    let x1 = r.right().div_ceil(TILE).saturating_mul(TILE).min(w);
+    let y1 = r.bottom().div_ceil(TILE).saturating_mul(TILE).min(h);
+    Rect {
+        x: x0,
+        y: y0,
+        width: x1 - x0,
+        height: y1 - y0,
+    }
+}
+
+/// Progress over the tiles of every view of one render.
+struct TileCounter<'a> {
+    hooks: &'a Hooks<'a>,
+    done: &'a AtomicUsize,
+    total: usize,
 }
 
 struct TileOut {
@@ -258,7 +463,10 @@ struct TileOut {
     shadow_rays: u64,
 }
 
-fn render_with<S: Real>(ctx: &Ctx, progress: &(dyn Fn(usize, usize) + Sync)) -> (Frame, Stats) {
+/// Traces and shades the tiles of `rect` (tile-aligned, in the view's sample coordinates) of
+/// one view: the prepass over the cells those pixels read, then the tiles in parallel. Returns
+/// a frame of `rect`'s size (without post effects) and its counters.
+fn trace_rect<S: Real>(ctx: &Ctx, rect: Rect, hooks: &TileCounter) -> (Frame, Stats) {
     let mut stats = Stats::default();
     let t0 = Instant::now();
     // Every ray may start at the distance bound measured at its eye; when the origin moves
@@ -292,7 +500,7 @@ fn render_with<S: Real>(ctx: &Ctx, progress: &(dyn Fn(usize, usize) + Sync)) -> 
             },
             t_start,
         };
-        let (g, evals) = prepass::run::<S>(&view);
+        let (g, evals) = prepass::run::<S>(&view, rect, &|| hooks.hooks.cancelled());
         stats.de_prepass = evals;
         g
     } else {
@@ -301,29 +509,33 @@ fn render_with<S: Real>(ctx: &Ctx, progress: &(dyn Fn(usize, usize) + Sync)) -> 
     stats.ms_prepass = t0.elapsed().as_secs_f64() * 1e3;
 
     let t1 = Instant::now();
-    let tiles_x = ctx.w.div_ceil(TILE);
-    let tiles_y = ctx.h.div_ceil(TILE);
-    let total = (tiles_x * tiles_y) as usize;
-    let done = AtomicUsize::new(0);
+    let tx0 = rect.x / TILE;
+    let ty0 = rect.y / TILE;
+    let tiles_x = rect.width.div_ceil(TILE);
+    let tiles_y = rect.height.div_ceil(TILE);
+    let count = (tiles_x * tiles_y) as usize;
     let shading = Shading::new(
         ctx.tape,
         &ctx.scene.render,
         &ctx.scene.lights,
-        (ctx.scene.camera.target - ctx.scene.camera.eye).length(),
+        (ctx.camera.target - ctx.camera.eye).length(),
     );
-    let tiles: Vec<TileOut> = (0..total)
+    let tiles: Vec<Option<TileOut>> = (0..count)
         .into_par_iter()
         .map_init(Evaluator::<S>::new, |ev, i| {
-            let tx = i as u32 % tiles_x;
-            let ty = i as u32 / tiles_x;
+            if hooks.hooks.cancelled() {
+                return None;
+            }
+            let tx = tx0 + i as u32 % tiles_x;
+            let ty = ty0 + i as u32 / tiles_x;
             let out = tile::<S>(ctx, &grid, &shading, ev, tx * TILE, ty * TILE);
-            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress(n, total);
-            out
+            let n = hooks.done.fetch_add(1, Ordering::Relaxed) + 1;
+            (hooks.hooks.progress)(n, hooks.total);
+            Some(out)
         })
         .collect();
-    let mut frame = Frame::new(ctx.w, ctx.h);
-    for t in &tiles {
+    let mut frame = Frame::new(rect.width, rect.height);
+    for t in tiles.iter().flatten() {
         for (k, ((((c, d), n), id), st)) in t
             .colour
             .iter()
@@ -333,8 +545,8 @@ fn render_with<S: Real>(ctx: &Ctx, progress: &(dyn Fn(usize, usize) + Sync)) -> 
             .zip(&t.steps)
             .enumerate()
         {
-            let x = t.x0 + k as u32 % t.tw;
-            let y = t.y0 + k as u32 / t.tw;
+            let x = t.x0 + k as u32 % t.tw - rect.x;
+            let y = t.y0 + k as u32 / t.tw - rect.y;
             let j = frame.index(x, y);
             frame.colour[j] = *c;
             frame.depth[j] = *d;
@@ -346,7 +558,7 @@ fn render_with<S: Real>(ctx: &Ctx, progress: &(dyn Fn(usize, usize) + Sync)) -> 
         stats.de_shade += t.de_shade;
         stats.shadow_rays += t.shadow_rays;
     }
-    stats.primary_rays = ctx.w as u64 * ctx.h as u64;
+    stats.primary_rays = rect.width as u64 * rect.height as u64;
     stats.hits = frame.depth.iter().filter(|d| d.is_finite()).count() as u64;
     stats.ms_trace = t1.elapsed().as_secs_f64() * 1e3;
     (frame, stats)

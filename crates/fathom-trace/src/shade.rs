@@ -10,13 +10,10 @@ use fathom_core::real::{Mask, Real};
 use fathom_core::scene::{Light, RenderSettings};
 use fathom_core::{Evaluator, Material, Tape, V3};
 
-/// Most steps of a shadow ray.
-pub const SHADOW_STEPS: u32 = 96;
+pub use fathom_core::shared::{AO_SAMPLES, SHADOW_STEPS};
 /// Shadow rays leave the surface this many pixel footprints along the normal (fractal distance
 /// estimates undershoot close to the surface; a smaller lift self-shadows).
 pub const SHADOW_LIFT: f64 = 4.0;
-/// Distance samples of the ambient-occlusion estimate.
-pub const AO_SAMPLES: u32 = 5;
 
 /// Scene-wide shading inputs, prepared once per render.
 pub struct Shading<'a> {

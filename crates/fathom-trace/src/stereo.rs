@@ -322,7 +322,7 @@ mod tests {
                 },
                 ..Options::default()
             };
-            let e = render(&scene, &o, &|_, _| {}).unwrap_err();
+            let e = render(&scene, &o, &|_, _| {}).unwrap_err().to_string();
             assert!(e.contains("eye separation"), "{e}");
         }
         // A size whose doubled output would overflow u32 is refused, not wrapped.
@@ -340,7 +340,7 @@ mod tests {
                 projection,
                 ..Options::default()
             };
-            let e = render(&scene, &o, &|_, _| {}).unwrap_err();
+            let e = render(&scene, &o, &|_, _| {}).unwrap_err().to_string();
             assert!(e.contains("limit"), "{e}");
         }
         // The output size counts: two 16384-wide views side by side exceed the limit.
@@ -353,6 +353,14 @@ mod tests {
             ..Options::default()
         };
         let e = render(&scene, &o, &|_, _| {}).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                crate::TraceError::Options(crate::OptionsError::StereoTooLarge { .. })
+            ),
+            "{e}"
+        );
+        let e = e.to_string();
         assert!(e.contains("32768x4") && e.contains("limit"), "{e}");
     }
 }

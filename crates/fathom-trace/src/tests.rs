@@ -341,3 +341,65 @@ const GOLDEN_MENGER: &str = "
     ...........##########...........
     .............#######............
 ";
+
+/// The `k`-th of `n` nearly equal parts of `0..len` (the last takes the rest).
+fn part(len: u32, n: u32, k: u32) -> (u32, u32) {
+    let a = len * k / n;
+    let b = len * (k + 1) / n;
+    (a, b - a)
+}
+
+#[test]
+fn regions_are_bit_identical_to_the_whole_image() {
+    // A 3x3 grid of uneven regions (not tile- or block-aligned), with SSAO (whose reach crosses
+    // region borders), supersampling and the prepass (whose cells straddle them), mono and
+    // side by side (regions that straddle the two eyes), on a fractal and a tree scene.
+    use crate::render_tape;
+    use fathom_core::frame::Rect;
+    use fathom_core::{Projection, Tape};
+    for name in ["menger", "model-tree"] {
+        let scene = presets::load(name).unwrap();
+        let tape = Tape::compile(&scene).unwrap();
+        for projection in [
+            Projection::Mono,
+            Projection::SideBySide {
+                eye_separation: 0.1,
+            },
+        ] {
+            let o = Options {
+                width: 45,
+                height: 29,
+                supersample: 2,
+                ssao: 1.5,
+                projection,
+                ..Options::default()
+            };
+            let hooks = crate::Hooks::NONE;
+            let (whole, _) = render_tape(&tape, &scene, &scene.camera, &o, None, hooks).unwrap();
+            assert!(
+                whole.depth.iter().any(|d| d.is_finite()),
+                "{name}: nothing in view"
+            );
+            let (ow, oh) = o.output_size();
+            for j in 0..3 {
+                for i in 0..3 {
+                    let (x, width) = part(ow, 3, i);
+                    let (y, height) = part(oh, 3, j);
+                    let r = Rect {
+                        x,
+                        y,
+                        width,
+                        height,
+                    };
+                    let (got, s) =
+                        render_tape(&tape, &scene, &scene.camera, &o, Some(r), hooks).unwrap();
+                    assert_eq!((s.width, s.height), (width, height));
+                    assert!(
+                        got == whole.crop(r),
+                        "{name} {projection:?}: region {r:?} differs from the whole image"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -30,11 +30,8 @@ pub enum Method {
     Enhanced,
 }
 
-/// Over-relaxation factor of the enhanced tracer (Keinert et al. suggest 1.2 to 1.6 for
-/// distance bounds). Measured on the Mandelbulb at 640x480 (depth evaluations per pixel; basic
-/// 25.2): without the prepass 1.2 gives 20.9 and 1.5 gives 26.1; with the prepass (basic 11.6)
-/// 1.2 gives 10.2 and 1.5 gives 9.6. Rendering uses the prepass by default, hence 1.5.
-pub const OMEGA: f64 = 1.5;
+/// Over-relaxation factor of the enhanced tracer (shared with the WGSL tracer).
+pub use fathom_core::shared::OMEGA;
 
 /// How one march behaves.
 #[derive(Clone, Copy, Debug)]

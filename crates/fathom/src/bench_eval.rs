@@ -3,13 +3,8 @@
 //! and of a parameter-only update. Prints JSON.
 
 use clap::Args;
-use fathom_core::combine::Combine;
 use fathom_core::presets::PRESETS;
-use fathom_core::primitives::Primitive;
-use fathom_core::registry::Family;
-use fathom_core::scene::Call;
-use fathom_core::transforms::Transform;
-use fathom_core::{Evaluator, F32x8, Node, Real, Scene, Tape, V3};
+use fathom_core::{Evaluator, F32x8, Real, Scene, Tape, V3};
 use serde_json::json;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -83,42 +78,19 @@ fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64) {
     (scalar, packet)
 }
 
-/// A 100-node tree mixing every primitive, several operators and every combine.
-pub fn hundred_node_scene() -> Scene {
-    let prims = Primitive::all();
-    let combines = Combine::all();
-    let mut root = Node::new(Primitive::Sphere);
-    for i in 0..9 {
-        let mut branch = Node::new(prims[(i * 7 + 1) % prims.len()])
-            .combine(combines[i % combines.len()])
-            .op(Call::new(Transform::Translate).with("offset", &[i as f64 * 0.3, 0.0, 0.0]));
-        for j in 0..10 {
-            let k = i * 10 + j;
-            branch = branch.child(
-                Node::new(prims[k % prims.len()])
-                    .combine(combines[k % combines.len()])
-                    .op(Call::new(Transform::Rotate).with("angle", &[k as f64]))
-                    .op(Call::new(Transform::Scale).with("factor", &[0.5])),
-            );
-        }
-        root = root.child(branch);
-    }
-    Scene::new(root)
-}
-
 pub fn run(a: EvalArgs) -> Result<(), String> {
     if !(a.seconds > 0.0 && a.seconds <= 60.0) {
         return Err(format!("--seconds = {} is out of range (0, 60]", a.seconds));
     }
     for name in &a.presets {
-        fathom_core::presets::find(name)?;
+        fathom_core::presets::find(name).map_err(|e| e.to_string())?;
     }
     let mut rows = Vec::new();
     for p in PRESETS
         .iter()
         .filter(|p| a.presets.is_empty() || a.presets.iter().any(|n| n == p.name))
     {
-        let scene = fathom_core::presets::load(p.name)?;
+        let scene = fathom_core::presets::load(p.name).map_err(|e| e.to_string())?;
         let tape = Tape::compile(&scene).map_err(|e| format!("{}: {e}", p.name))?;
         let pts = sample_points(&scene, 4096);
         let (scalar, packet) = eval_rates(&tape, &pts, a.seconds);
@@ -137,7 +109,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "packet_over_scalar": (packet / scalar * 100.0).round() / 100.0,
         }));
     }
-    let scene = hundred_node_scene();
+    let scene = fathom_core::scenes::hundred_node_scene();
     let nodes = scene.root.count();
     let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;
     let compile = 1e6
@@ -151,6 +123,26 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             edited.root.shape.params[0] += 1e-9;
             black_box(t2.update_params(&edited).ok());
         });
+    // The same edits through the render session, as the window makes them: a parameter edit
+    // (re-bakes the parameter buffer) and a structure edit (alternating between two trees, so
+    // every call recompiles). Each call includes the copy of the scene handed to the session.
+    let mut session = fathom_render::Session::new(scene.clone()).map_err(|e| e.to_string())?;
+    let mut edited = scene.clone();
+    let set_params = 1e6
+        / rate(a.seconds, || {
+            edited.root.shape.params[0] += 1e-9;
+            black_box(session.set_scene(edited.clone()).ok());
+        });
+    let params_only = session.counters().compiles == 1;
+    let mut smaller = scene.clone();
+    smaller.root.children.pop();
+    let shapes = [scene.clone(), smaller];
+    let mut k = 0;
+    let set_structure = 1e6
+        / rate(a.seconds, || {
+            k += 1;
+            black_box(session.set_scene(shapes[k % 2].clone()).ok());
+        });
     let out = json!({
         "bench": "eval",
         "threads": 1,
@@ -161,6 +153,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "tape_len": tape.instrs().len(),
             "compile_us": (compile * 10.0).round() / 10.0,
             "update_params_us": (update * 10.0).round() / 10.0,
+            "session_set_scene_params_us": (set_params * 10.0).round() / 10.0,
+            "session_set_scene_params_compiled_nothing": params_only,
+            "session_set_scene_structure_us": (set_structure * 10.0).round() / 10.0,
         },
     });
     println!(
@@ -168,16 +163,4 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
     );
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn hundred_node_scene_has_a_hundred_nodes_and_compiles() {
-        let s = hundred_node_scene();
-        assert_eq!(s.root.count(), 100);
-        Tape::compile(&s).unwrap();
-    }
 }

@@ -5,12 +5,12 @@
 
 use clap::Args;
 use fathom_core::presets::{self, PRESETS};
-use fathom_gpu::{Projection, RenderOptions, Renderer};
+use fathom_render::{Backend, RenderRequest, Session};
 
 #[derive(Args)]
 pub struct GpuArgs {
     /// Image size WIDTHxHEIGHT.
-    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    #[arg(long, default_value = "640x480", value_parser = crate::args::parse_size)]
     pub size: (u32, u32),
     /// Timed frames per preset and renderer (after one untimed warm-up frame on the GPU).
     #[arg(long, default_value_t = 3)]
@@ -20,61 +20,54 @@ pub struct GpuArgs {
     pub preset: Option<String>,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size `{s}` should look like 640x480"))?;
-    let p = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|&n| (1..=16384).contains(&n))
-            .ok_or_else(|| format!("size `{s}`: `{v}` is not a whole number in [1, 16384]"))
-    };
-    Ok((p(w)?, p(h)?))
-}
-
 pub fn run(a: GpuArgs) -> Result<(), String> {
     if !(1..=100).contains(&a.frames) {
         return Err("--frames must be in [1, 100]".into());
     }
     let (width, height) = a.size;
     let names: Vec<&str> = match &a.preset {
-        Some(p) => vec![presets::find(p)?.name],
+        Some(p) => vec![presets::find(p).map_err(|e| e.to_string())?.name],
         None => PRESETS.iter().map(|p| p.name).collect(),
     };
-    let mut r = Renderer::headless().map_err(|e| e.to_string())?;
-    let software = r.gpu().is_software();
+    let renderer = fathom_gpu::Renderer::headless().map_err(|e| e.to_string())?;
+    let adapter = renderer.gpu().adapter_name();
+    let software = renderer.gpu().is_software();
+    let mut renderer = Some(renderer);
+    let gpu_req = RenderRequest {
+        width,
+        height,
+        backend: Backend::Gpu,
+        ..RenderRequest::default()
+    };
+    let cpu_req = RenderRequest {
+        backend: Backend::Trace,
+        ..gpu_req.clone()
+    };
     let mut rows = Vec::new();
     for name in names {
-        let scene = presets::load(name)?;
-        let o = RenderOptions {
-            width,
-            height,
-            projection: Projection::Mono,
-            prepass: true,
-        };
+        let scene = presets::load(name).map_err(|e| e.to_string())?;
+        let cam = scene.camera.clone();
+        let mut s = Session::new(scene).map_err(|e| e.to_string())?;
+        // One device for the whole run: the session hands it back when it is dropped below.
+        s.set_gpu(renderer.take().expect("returned after each preset"));
+        let mut frame = |req: &RenderRequest| s.render(&cam, req).map_err(|e| e.to_string());
         // Warm-up: uploads the tape and sizes the buffers.
-        r.render_scene(&scene, &o).map_err(|e| e.to_string())?;
+        frame(&gpu_req)?;
         let mut gpu_ms = Vec::new();
         let mut gpu_de = 0.0;
         for _ in 0..a.frames {
-            let (_, s) = r.render_scene(&scene, &o).map_err(|e| e.to_string())?;
-            gpu_ms.push(s.ms_total);
-            gpu_de = s.de_per_pixel();
+            let r = frame(&gpu_req)?;
+            gpu_ms.push(r.stats.ms.total);
+            gpu_de = r.stats.depth_de_per_pixel;
         }
-        let co = fathom_trace::Options {
-            width,
-            height,
-            ..Default::default()
-        };
         let mut cpu_ms = Vec::new();
         let mut cpu_de = 0.0;
         for _ in 0..a.frames {
-            let (_, s) = fathom_trace::render(&scene, &co, &|_, _| {})?;
-            cpu_ms.push(s.ms_total);
-            cpu_de = s.de_per_pixel();
+            let r = frame(&cpu_req)?;
+            cpu_ms.push(r.stats.ms.total);
+            cpu_de = r.stats.depth_de_per_pixel;
         }
+        renderer = s.take_gpu();
         let median = |v: &mut Vec<f64>| {
             v.sort_by(f64::total_cmp);
             v[v.len() / 2]
@@ -99,7 +92,7 @@ pub fn run(a: GpuArgs) -> Result<(), String> {
         "width": width,
         "height": height,
         "frames": a.frames,
-        "adapter": r.gpu().adapter_name(),
+        "adapter": adapter,
         "adapter_is_software": software,
         "note": if software {
             "the adapter is a CPU implementation of Vulkan (e.g. lavapipe): its figures are CPU timings, not GPU speed"

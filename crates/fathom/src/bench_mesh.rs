@@ -106,7 +106,7 @@ fn load_average() -> String {
 fn single(a: &MeshBenchArgs, spec: &str) -> Result<serde_json::Value, String> {
     let (name, res) = spec.split_once(',').ok_or("--single PRESET,RESOLUTION")?;
     let res: u32 = res.parse().map_err(|_| "bad resolution")?;
-    let scene = presets::load(name)?;
+    let scene = presets::load(name).map_err(|e| e.to_string())?;
     let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;
     let mut o = MeshOptions {
         resolution: res,

@@ -6,12 +6,15 @@
 //! 1 vs 2 threads; outline agreement with a sphere tracer; strict self-similarity of Menger
 //! frames at 1/3, 1/9, 1/27 of the distance.
 
-use crate::cmd_zoom::{TraversalArg, ZoomArgs, ZoomReport, parse_size, run_zoom};
+use crate::args::parse_size;
 use clap::Args;
+use fathom_core::camera_path::{CameraPath, path_preset};
+use fathom_core::scenes;
+use fathom_render::zoom::{Zoom, ZoomReport};
+use fathom_render::{Backend, OctreeSettings, RenderRequest};
 use fathom_svo::outline::{agreement, similarity};
 use fathom_svo::stats::median;
-use fathom_svo::zoom::{self, Path};
-use fathom_svo::{Explorer, ExplorerConfig, scenes};
+use fathom_svo::{Explorer, ExplorerConfig, RootSpec, Traversal};
 use plotters::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -53,17 +56,31 @@ struct ZoomFigures {
     stopped: Option<String>,
 }
 
-fn zoom_args(preset: &str, t: TraversalArg, frames: usize, depth: f64, size: &str) -> ZoomArgs {
-    ZoomArgs {
-        preset: preset.into(),
+/// A zoom of the bench: 2 threads, no SSAO, the octree defaults of `fathom zoom`.
+fn zoom(t: Traversal, frames: usize, depth: f64, size: &str) -> Result<Zoom, String> {
+    let (width, height) = parse_size(size)?;
+    Ok(Zoom {
         depth,
         frames,
-        size: size.into(),
-        traversal: t,
-        threads: 2,
-        ssao: 0.0,
-        ..crate::clap_defaults()
-    }
+        request: RenderRequest {
+            width,
+            height,
+            threads: Some(2),
+            backend: Backend::Octree,
+            octree: OctreeSettings {
+                traversal: t,
+                ..OctreeSettings::default()
+            },
+            ..RenderRequest::default()
+        },
+    })
+}
+
+/// Runs a zoom of `preset` without writing frames.
+fn run_zoom(preset: &str, z: &Zoom) -> Result<ZoomReport, String> {
+    let p = path_preset(preset).map_err(|e| e.to_string())?;
+    z.run(&p, false, |_, _, _, _| Ok(()))
+        .map_err(|e| e.to_string())
 }
 
 /// fps per decade of zoom: (log10 zoom at the decade's middle, median fps).
@@ -155,9 +172,9 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
     for preset in ["menger", "mandelbulb"] {
         let mut series = Vec::new();
         let mut last = Vec::new();
-        for t in [TraversalArg::Neighbour, TraversalArg::Kdrestart] {
+        for t in [Traversal::Neighbour, Traversal::KdRestart] {
             eprintln!("bench svo: {preset} {t:?}");
-            let r = run_zoom(&zoom_args(preset, t, frames, depth, &size), true)?;
+            let r = run_zoom(preset, &zoom(t, frames, depth, &size)?)?;
             let s = &r.summary;
             let _ = writeln!(
                 md,
@@ -171,7 +188,7 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
             );
             last.push(s.median_fps_last_decade);
             series.push(per_decade(&r));
-            if matches!(t, TraversalArg::Neighbour) && preset == "menger" {
+            if t == Traversal::Neighbour && preset == "menger" {
                 let nodes: Vec<(f64, f64)> = r
                     .frames
                     .iter()
@@ -238,9 +255,9 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
     for fid in [1.0, 2.0, 4.0] {
         let mut s = Vec::new();
         for sz in &sizes {
-            let mut z = zoom_args("mandelbulb", TraversalArg::Neighbour, 60, 10.0, sz);
-            z.fidelity = fid;
-            let r = run_zoom(&z, true)?;
+            let mut z = zoom(Traversal::Neighbour, 60, 10.0, sz)?;
+            z.request.octree.fidelity = fid;
+            let r = run_zoom("mandelbulb", &z)?;
             let fps: Vec<f64> = r.frames[30.min(r.frames.len())..]
                 .iter()
                 .map(|f| 1e3 / f.frame_ms)
@@ -266,9 +283,9 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
         "## 1 vs 2 threads (Menger, first 60 frames, {size})\n\n| threads | median fps (frames 30..60) |\n|---|---|"
     );
     for th in [1, 2] {
-        let mut z = zoom_args("menger", TraversalArg::Neighbour, 60, 10.0, &size);
-        z.threads = th;
-        let r = run_zoom(&z, true)?;
+        let mut z = zoom(Traversal::Neighbour, 60, 10.0, &size)?;
+        z.request.threads = Some(th);
+        let r = run_zoom("menger", &z)?;
         let fps: Vec<f64> = r.frames[30.min(r.frames.len())..]
             .iter()
             .map(|f| 1e3 / f.frame_ms)
@@ -283,13 +300,15 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
         md,
         "\n## Outline agreement with a sphere tracer (160x120, voxels <= 0.5 px, tracer hit within 0.3 px)\n\n| scene | IoU | tracer hits missed | tracer hits |\n|---|---|---|---|"
     );
-    let mb = fathom_core::presets::load("mandelbulb")?;
+    let mb = fathom_core::presets::load("mandelbulb").map_err(|e| e.to_string())?;
     let mbox = scenes::mandelbox();
     let cases = [
         (
             "menger",
             scenes::menger(6),
-            zoom::preset("menger")?.camera(0, 2, 1.0),
+            path_preset("menger")
+                .map_err(|e| e.to_string())?
+                .camera(0, 2, 1.0),
             2.0,
         ),
         ("mandelbulb", mb.clone(), mb.camera.clone(), 2.0),
@@ -300,10 +319,10 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
             width: 160,
             height: 120,
             fidelity: 0.5,
-            root: fathom_svo::RootSpec::centred(half),
+            root: RootSpec::centred(half),
             ..ExplorerConfig::default()
         };
-        let ag = agreement(&scene, &cam, cfg, 0.3)?;
+        let ag = agreement(&scene, &cam, cfg, 0.3).map_err(|e| e.to_string())?;
         let _ = writeln!(
             md,
             "| {name} | {:.4} | {} | {} |",
@@ -317,8 +336,8 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
         md,
         "\n## Strict self-similarity of the Menger corner (320x240, settled)\n\n| pair | identical pixels | within 10% colour |\n|---|---|---|"
     );
-    let p = zoom::preset("menger")?;
-    let Path::Zoom { target, dir, start } = p.path.clone() else {
+    let p = path_preset("menger").map_err(|e| e.to_string())?;
+    let CameraPath::Zoom { target, dir, start } = p.path.clone() else {
         return Err("menger preset is not a zoom".into());
     };
     let mut imgs = Vec::new();
@@ -333,10 +352,10 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
         let cfg = ExplorerConfig {
             width: 320,
             height: 240,
-            root: p.root,
+            root: RootSpec::from_cube(p.cube),
             ..ExplorerConfig::default()
         };
-        let mut ex = Explorer::new(&p.scene, cfg)?;
+        let mut ex = Explorer::new(&p.scene, cfg).map_err(|e| e.to_string())?;
         ex.settle(&cam, 200);
         let (img, reqs, _) = ex.render(&cam);
         ex.release_requests(&reqs);

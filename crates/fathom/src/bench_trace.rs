@@ -4,12 +4,12 @@
 
 use clap::Args;
 use fathom_core::presets::{self, PRESETS};
-use fathom_trace::{Method, Options, Stats};
+use fathom_render::{RenderRequest, Session, Stats, TracerRule};
 
 #[derive(Args)]
 pub struct TraceArgs {
     /// Image size WIDTHxHEIGHT.
-    #[arg(long, default_value = "640x480", value_parser = parse_size)]
+    #[arg(long, default_value = "640x480", value_parser = crate::args::parse_size)]
     size: (u32, u32),
     /// Worker threads.
     #[arg(long, default_value_t = 2)]
@@ -22,25 +22,14 @@ pub struct TraceArgs {
     preset: Option<String>,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once('x').ok_or("size should look like 640x480")?;
-    Ok((
-        w.parse().map_err(|_| "bad width")?,
-        h.parse().map_err(|_| "bad height")?,
-    ))
-}
-
-fn measure(
-    scene: &fathom_core::Scene,
-    opts: &Options,
-    repeat: u32,
-) -> Result<(Stats, f64), String> {
+fn measure(s: &mut Session, req: &RenderRequest, repeat: u32) -> Result<(Stats, f64), String> {
+    let cam = s.scene().camera.clone();
     let mut best = f64::INFINITY;
     let mut stats = None;
     for _ in 0..repeat.max(1) {
-        let (_, s) = fathom_trace::render(scene, opts, &|_, _| {})?;
-        best = best.min(s.ms_total);
-        stats = Some(s);
+        let r = s.render(&cam, req).map_err(|e| e.to_string())?;
+        best = best.min(r.stats.ms.total);
+        stats = Some(r.stats);
     }
     Ok((stats.expect("repeat >= 1"), best))
 }
@@ -49,59 +38,58 @@ pub fn run(a: TraceArgs) -> Result<(), String> {
     if a.threads == 0 || a.threads > 1024 {
         return Err("--threads must be in [1, 1024]".into());
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads)
-        .build()
-        .map_err(|e| e.to_string())?;
     let mut out = Vec::new();
     for p in PRESETS {
         if a.preset.as_deref().is_some_and(|n| n != p.name) {
             continue;
         }
-        let scene = presets::load(p.name)?;
+        let scene = presets::load(p.name).map_err(|e| e.to_string())?;
+        let mut session = Session::new(scene).map_err(|e| e.to_string())?;
         let mut entry = serde_json::Map::new();
         entry.insert("preset".into(), p.name.into());
         let mut de = [0f64; 4];
         for (k, (name, method, prepass)) in [
-            ("basic", Method::Basic, false),
-            ("enhanced", Method::Enhanced, false),
-            ("enhanced_prepass", Method::Enhanced, true),
-            ("basic_prepass", Method::Basic, true),
+            ("basic", TracerRule::Basic, false),
+            ("enhanced", TracerRule::Enhanced, false),
+            ("enhanced_prepass", TracerRule::Enhanced, true),
+            ("basic_prepass", TracerRule::Basic, true),
         ]
         .into_iter()
         .enumerate()
         {
-            let opts = Options {
+            let req = RenderRequest {
                 width: a.size.0,
                 height: a.size.1,
-                method,
+                tracer: method,
                 prepass,
-                ..Options::default()
+                threads: Some(a.threads),
+                ..RenderRequest::default()
             };
-            let (s, ms) = pool.install(|| measure(&scene, &opts, a.repeat))?;
-            de[k] = s.de_per_pixel();
+            let (s, ms) = measure(&mut session, &req, a.repeat)?;
+            de[k] = s.depth_de_per_pixel;
             entry.insert(
                 name.into(),
                 serde_json::json!({
                     "wall_ms": ms,
                     "rays_per_s": s.primary_rays as f64 / (ms / 1e3),
-                    "depth_de_per_pixel": s.de_per_pixel(),
-                    "shade_de_per_pixel": s.de_shade as f64 / s.primary_rays as f64,
-                    "ms_prepass": s.ms_prepass,
-                    "ms_trace_and_shade": s.ms_trace,
+                    "depth_de_per_pixel": s.depth_de_per_pixel,
+                    "shade_de_per_pixel": s.de_evaluations.shade as f64 / s.primary_rays as f64,
+                    "ms_prepass": s.ms.prepass,
+                    "ms_trace_and_shade": s.ms.trace_and_shade,
                     "hits": s.hits,
-                    "deep_f64_path": s.deep,
+                    "deep_f64_path": s.deep_f64_path,
                 }),
             );
         }
         // The depth passes alone (no colouring) with everything on: the tracer's own speed.
-        let opts = Options {
+        let req = RenderRequest {
             width: a.size.0,
             height: a.size.1,
             geometry_only: true,
-            ..Options::default()
+            threads: Some(a.threads),
+            ..RenderRequest::default()
         };
-        let (_, ms) = pool.install(|| measure(&scene, &opts, a.repeat))?;
+        let (_, ms) = measure(&mut session, &req, a.repeat)?;
         entry.insert("depth_only_enhanced_prepass_wall_ms".into(), ms.into());
         entry.insert(
             "enhanced_vs_basic_de_reduction_pct".into(),

@@ -113,7 +113,7 @@ pub fn run(a: MeshArgs) -> Result<(), String> {
     }
     let scene = match (&a.scene, &a.preset) {
         (Some(path), _) => scene_file::load(path).map_err(|e| e.to_string())?,
-        (None, Some(p)) => presets::load(p)?,
+        (None, Some(p)) => presets::load(p).map_err(|e| e.to_string())?,
         (None, None) => return Err("give a scene FILE or --preset NAME (see --help)".into()),
     };
     let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;

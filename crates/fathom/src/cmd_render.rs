@@ -1,10 +1,15 @@
 //! `fathom render`: a scene file or preset to an image, with diagnostic outputs (hit mask,
-//! depth EXR, step heat map, JSON statistics).
+//! depth EXR, step heat map, JSON statistics). The flags become a [`RenderRequest`] and the
+//! session renders it; this module only loads the scene, opens the outputs first (so a bad path
+//! fails before any work), drives the progress bar and writes the files.
 
+use crate::args::{parse_size, parse_vec};
 use clap::{Args, ValueEnum};
+use fathom_core::camera::MAX_EYE_SEPARATION;
 use fathom_core::scene::Scene;
-use fathom_core::{presets, scene_file};
-use fathom_trace::{Method, Options, Stats, output};
+use fathom_core::{Projection, presets, scene_file};
+use fathom_render::{Backend, Control, Progress, RenderRequest, Session, TracerRule};
+use fathom_trace::output;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -84,52 +89,50 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
-    /// Render on the GPU (wgpu). Without any adapter it says so and suggests the CPU path.
+    /// Render on the GPU (wgpu), the same as `--renderer gpu`. Without any adapter it says so
+    /// and suggests the CPU path; a view zoomed past f32 precision is rendered on the CPU.
     #[arg(long)]
     pub gpu: bool,
     /// Stereo: `sbs` (side by side, twice as wide) or `ods` (360-degree equirectangular, left
     /// eye on top, twice as tall; use a 2:1 --size). --size is one eye's view. Not with
     /// --renderer svo.
     #[arg(long, value_enum)]
-    pub stereo: Option<crate::render_gpu::StereoKind>,
+    pub stereo: Option<StereoKind>,
     /// Distance between the eyes for --stereo, in scene units.
     #[arg(long, default_value_t = 0.065)]
     pub eye_separation: f64,
-    /// Renderer: the sphere tracer, or the sparse voxel octree (settled at this view).
+    /// Renderer: the CPU sphere tracer, the GPU (wgpu), or the sparse voxel octree (settled
+    /// at this view).
     #[arg(long, value_enum, default_value = "trace")]
-    pub renderer: crate::cmd_zoom::RendererKind,
+    pub renderer: RendererKind,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size `{s}` should look like 1280x720"))?;
-    let p = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("size `{s}`: `{v}` is not a whole number"))
-    };
-    Ok((p(w)?, p(h)?))
+/// Which renderer `fathom render` uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RendererKind {
+    /// The CPU sphere tracer.
+    Trace,
+    /// The WGSL tape interpreter through wgpu.
+    Gpu,
+    /// The sparse voxel octree, subdivided until settled at the view.
+    Svo,
 }
 
-fn parse_vec(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("`{s}` should be three numbers x,y,z"))?;
-    match v[..] {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(x, y, z)),
-        _ => Err(format!("`{s}` should be three finite numbers x,y,z")),
-    }
+/// Stereo layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum StereoKind {
+    /// Side-by-side pair of parallel pinhole views.
+    Sbs,
+    /// Omni-directional stereo, equirectangular, top (left eye) / bottom (right eye).
+    Ods,
 }
 
 /// Loads the scene named by the arguments and applies the camera overrides.
 fn load_scene(a: &RenderArgs) -> Result<Scene, String> {
     let mut scene = match (&a.scene, &a.preset) {
         (Some(path), _) => scene_file::load(path).map_err(|e| e.to_string())?,
-        (None, Some(p)) => presets::load(p)?,
-        (None, None) => presets::load(presets::DEFAULT_PRESET)?,
+        (None, Some(p)) => presets::load(p).map_err(|e| e.to_string())?,
+        (None, None) => presets::load(presets::DEFAULT_PRESET).map_err(|e| e.to_string())?,
     };
     let c = &mut scene.camera;
     if let Some(v) = a.eye {
@@ -144,131 +147,34 @@ fn load_scene(a: &RenderArgs) -> Result<Scene, String> {
     if let Some(v) = a.fov {
         c.fov = v;
     }
-    scene.validate()?;
+    scene.validate().map_err(|e| e.to_string())?;
     Ok(scene)
 }
 
-/// Statistics as JSON.
-pub fn stats_json(s: &Stats) -> serde_json::Value {
-    let px = (s.width as f64 * s.height as f64).max(1.0);
-    serde_json::json!({
-        "width": s.width,
-        "height": s.height,
-        "deep_f64_path": s.deep,
-        "primary_rays": s.primary_rays,
-        "shadow_rays": s.shadow_rays,
-        "hits": s.hits,
-        "de_evaluations": {
-            "prepass": s.de_prepass,
-            "trace": s.de_trace,
-            "shade": s.de_shade,
+/// Checks the stereo flags (naming them) and turns them into a [`Projection`].
+fn projection(a: &RenderArgs, backend: Backend) -> Result<Projection, String> {
+    let sep = a.eye_separation;
+    if !(sep.is_finite() && (0.0..=MAX_EYE_SEPARATION).contains(&sep)) {
+        return Err(format!(
+            "--eye-separation = {sep} is out of range [0, {MAX_EYE_SEPARATION}] (scene units)"
+        ));
+    }
+    if backend == Backend::Octree && a.stereo.is_some() {
+        return Err(
+            "--stereo is not supported by --renderer svo (the octree renders one mono \
+             view); leave out --renderer svo to render stereo with the sphere tracer"
+                .into(),
+        );
+    }
+    Ok(match a.stereo {
+        None => Projection::Mono,
+        Some(StereoKind::Sbs) => Projection::SideBySide {
+            eye_separation: sep,
         },
-        "depth_de_per_pixel": s.de_per_pixel(),
-        "trace_steps_per_pixel": s.de_trace as f64 / px,
-        "ms": {
-            "prepass": s.ms_prepass,
-            "trace_and_shade": s.ms_trace,
-            "post": s.ms_post,
-            "total": s.ms_total,
+        Some(StereoKind::Ods) => Projection::Ods {
+            eye_separation: sep,
         },
     })
-}
-
-fn open(p: &Option<PathBuf>) -> Result<Option<(std::fs::File, &Path)>, String> {
-    p.as_deref()
-        .map(|p| output::open_output(p).map(|f| (f, p)))
-        .transpose()
-}
-
-pub fn run(a: RenderArgs) -> Result<(), String> {
-    let (width, height) = a.size;
-    let opts = Options {
-        width,
-        height,
-        method: match a.tracer {
-            TracerKind::Basic => Method::Basic,
-            TracerKind::Enhanced => Method::Enhanced,
-        },
-        prepass: !a.no_prepass,
-        supersample: a.supersample,
-        geometry_only: false,
-        ssao: a.ssao,
-        projection: crate::render_gpu::projection(
-            a.stereo,
-            a.eye_separation,
-            a.renderer == crate::cmd_zoom::RendererKind::Svo,
-        )?,
-    };
-    opts.validate()?;
-    if a.threads == Some(0) || a.threads.is_some_and(|t| t > 1024) {
-        return Err("--threads must be in [1, 1024]".into());
-    }
-    let scene = load_scene(&a)?;
-    if a.renderer == crate::cmd_zoom::RendererKind::Svo {
-        return crate::cmd_zoom::render_still(&scene, &a);
-    }
-    // Open every output before rendering, so a bad path fails fast.
-    let out = output::open_output(&a.output)?;
-    let mask = open(&a.mask)?;
-    let depth = open(&a.depth)?;
-    let steps = open(&a.steps)?;
-    let stats_file = open(&a.stats)?;
-
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| e.to_string())?;
-    let bar = if a.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        let b = indicatif::ProgressBar::new(0);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} rendering [{bar:40}] {percent}% {elapsed}",
-            )
-            .map_err(|e| e.to_string())?
-            .progress_chars("=> "),
-        );
-        b
-    };
-    let progress = |done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
-    let (frame, stats, ms_total) = if a.gpu {
-        let r = pool.install(|| crate::render_gpu::render(&scene, &opts))?;
-        (r.frame, r.stats, r.ms_total)
-    } else {
-        let (frame, stats) = pool.install(|| fathom_trace::render(&scene, &opts, &progress))?;
-        (frame, stats_json(&stats), stats.ms_total)
-    };
-    bar.finish_and_clear();
-
-    output::save_colour(&frame, out, &a.output)?;
-    if let Some((f, p)) = mask {
-        output::save_mask(&frame, f, p)?;
-    }
-    if let Some((f, p)) = depth {
-        output::save_depth(&frame, scene.render.max_distance as f32, f, p)?;
-    }
-    if let Some((f, p)) = steps {
-        output::save_steps(&frame, f, p)?;
-    }
-    if let Some((f, p)) = stats_file {
-        serde_json::to_writer_pretty(std::io::BufWriter::new(f), &stats)
-            .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
-    }
-    if !a.quiet {
-        let shown = std::fs::canonicalize(&a.output).unwrap_or(a.output.clone());
-        eprintln!(
-            "wrote {} ({}x{}) in {:.0} ms",
-            shown.display(),
-            frame.width,
-            frame.height,
-            ms_total
-        );
-    }
-    Ok(())
 }
 
 impl RenderArgs {
@@ -277,6 +183,129 @@ impl RenderArgs {
     pub fn defaults() -> RenderArgs {
         crate::clap_defaults()
     }
+
+    /// The backend the flags choose.
+    fn backend(&self) -> Result<Backend, String> {
+        Ok(match (self.gpu, self.renderer) {
+            (true, RendererKind::Svo) => {
+                return Err("--gpu and --renderer svo choose two renderers; pick one".into());
+            }
+            (true, _) | (false, RendererKind::Gpu) => Backend::Gpu,
+            (false, RendererKind::Trace) => Backend::Trace,
+            (false, RendererKind::Svo) => Backend::Octree,
+        })
+    }
+
+    /// The request these flags describe, checked.
+    pub fn request(&self) -> Result<RenderRequest, String> {
+        let backend = self.backend()?;
+        let (width, height) = self.size;
+        let req = RenderRequest {
+            width,
+            height,
+            projection: projection(self, backend)?,
+            supersample: self.supersample,
+            prepass: !self.no_prepass,
+            tracer: match self.tracer {
+                TracerKind::Basic => TracerRule::Basic,
+                TracerKind::Enhanced => TracerRule::Enhanced,
+            },
+            ssao: self.ssao,
+            backend,
+            threads: self.threads,
+            ..RenderRequest::default()
+        };
+        req.validate().map_err(|e| e.to_string())?;
+        Ok(req)
+    }
+}
+
+fn open(p: &Option<PathBuf>) -> Result<Option<(std::fs::File, &Path)>, String> {
+    p.as_deref()
+        .map(|p| {
+            output::open_output(p)
+                .map(|f| (f, p))
+                .map_err(|e| e.to_string())
+        })
+        .transpose()
+}
+
+fn progress_bar(quiet: bool) -> Result<indicatif::ProgressBar, String> {
+    if quiet {
+        return Ok(indicatif::ProgressBar::hidden());
+    }
+    let b = indicatif::ProgressBar::new(0);
+    b.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} rendering [{bar:40}] {percent}% {elapsed}",
+        )
+        .map_err(|e| e.to_string())?
+        .progress_chars("=> "),
+    );
+    Ok(b)
+}
+
+pub fn run(a: RenderArgs) -> Result<(), String> {
+    let req = a.request()?;
+    let scene = load_scene(&a)?;
+    // Open every output before rendering, so a bad path fails fast.
+    let out = output::open_output(&a.output).map_err(|e| e.to_string())?;
+    let mask = open(&a.mask)?;
+    let depth = open(&a.depth)?;
+    let steps = open(&a.steps)?;
+    let stats_file = open(&a.stats)?;
+
+    let far = scene.render.max_distance as f32;
+    let camera = scene.camera.clone();
+    let mut session = Session::new(scene).map_err(|e| e.to_string())?;
+    let bar = progress_bar(a.quiet)?;
+    let progress = |p: Progress| {
+        bar.set_length(p.total as u64);
+        bar.set_position(p.done as u64);
+    };
+    let control = Control {
+        cancel: None,
+        progress: Some(&progress),
+    };
+    let r = session
+        .render_with(&camera, &req, &control)
+        .map_err(|e| e.to_string())?;
+    bar.finish_and_clear();
+    if let Some(note) = &r.stats.note {
+        eprintln!("fathom: note: {note}");
+    }
+    let frame = &r.frame;
+    output::save_colour(frame, out, &a.output).map_err(|e| e.to_string())?;
+    if let Some((f, p)) = mask {
+        output::save_mask(frame, f, p).map_err(|e| e.to_string())?;
+    }
+    if let Some((f, p)) = depth {
+        output::save_depth(frame, far, f, p).map_err(|e| e.to_string())?;
+    }
+    if let Some((f, p)) = steps {
+        output::save_steps(frame, f, p).map_err(|e| e.to_string())?;
+    }
+    if let Some((f, p)) = stats_file {
+        serde_json::to_writer_pretty(std::io::BufWriter::new(f), &r.stats)
+            .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    }
+    if !a.quiet {
+        if let Some(o) = &r.stats.octree {
+            eprintln!(
+                "svo: settled in {} frames, {} nodes, {:.1} nodes per ray",
+                o.settle_frames, o.nodes, o.nodes_per_ray
+            );
+        }
+        let shown = std::fs::canonicalize(&a.output).unwrap_or(a.output.clone());
+        eprintln!(
+            "wrote {} ({}x{}) in {:.0} ms",
+            shown.display(),
+            frame.width,
+            frame.height,
+            r.stats.ms.total
+        );
+    }
+    Ok(())
 }
 
 /// What `fathom` with no arguments does: render the default preset to ./fathom.png at
@@ -305,13 +334,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn sizes_and_vectors_parse_or_explain() {
-        assert_eq!(parse_size("640x480"), Ok((640, 480)));
-        assert!(parse_size("640").is_err());
-        assert!(parse_size("ax4").is_err());
-        assert_eq!(parse_vec("1,-2,3.5"), Ok(DVec3::new(1.0, -2.0, 3.5)));
-        assert!(parse_vec("1,2").is_err());
-        assert!(parse_vec("1,2,nan").is_err());
+    fn stereo_options_become_projections_or_explain_themselves() {
+        let mut a = RenderArgs::defaults();
+        assert_eq!(projection(&a, Backend::Trace), Ok(Projection::Mono));
+        a.stereo = Some(StereoKind::Ods);
+        a.eye_separation = 0.1;
+        assert_eq!(
+            projection(&a, Backend::Gpu),
+            Ok(Projection::Ods {
+                eye_separation: 0.1
+            })
+        );
+        for sep in [f64::NAN, -1.0, 2e6] {
+            a.eye_separation = sep;
+            let e = projection(&a, Backend::Trace).unwrap_err();
+            assert!(e.contains("--eye-separation"), "{e}");
+        }
+        a.eye_separation = 0.065;
+        let e = projection(&a, Backend::Octree).unwrap_err();
+        assert!(
+            e.contains("--renderer svo") && e.contains("--stereo"),
+            "{e}"
+        );
+        a.gpu = true;
+        a.renderer = RendererKind::Svo;
+        assert!(a.request().unwrap_err().contains("pick one"));
     }
 
     fn args(output: &str, size: (u32, u32)) -> RenderArgs {
@@ -342,24 +389,21 @@ mod tests {
     fn stereo_renders_on_the_cpu_and_is_refused_for_the_octree() {
         let dir = std::env::temp_dir().join(format!("fathom-stereo-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        for (kind, size) in [
-            (crate::render_gpu::StereoKind::Sbs, (48, 16)),
-            (crate::render_gpu::StereoKind::Ods, (32, 16)),
-        ] {
+        for (kind, size) in [(StereoKind::Sbs, (48, 16)), (StereoKind::Ods, (32, 16))] {
             let p = dir.join(format!("{kind:?}.png"));
             let mut a = args(p.to_str().unwrap(), size);
             a.stereo = Some(kind);
             run(a).unwrap();
             let img = image::open(&p).unwrap();
             let want = match kind {
-                crate::render_gpu::StereoKind::Sbs => (2 * size.0, size.1),
-                crate::render_gpu::StereoKind::Ods => (size.0, 2 * size.1),
+                StereoKind::Sbs => (2 * size.0, size.1),
+                StereoKind::Ods => (size.0, 2 * size.1),
             };
             assert_eq!((img.width(), img.height()), want, "{kind:?}");
         }
         let mut a = args(dir.join("svo.png").to_str().unwrap(), (16, 8));
-        a.stereo = Some(crate::render_gpu::StereoKind::Ods);
-        a.renderer = crate::cmd_zoom::RendererKind::Svo;
+        a.stereo = Some(StereoKind::Ods);
+        a.renderer = RendererKind::Svo;
         let e = run(a).unwrap_err();
         assert!(e.contains("--renderer svo"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
@@ -382,6 +426,43 @@ mod tests {
         let stats: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(p("s.json")).unwrap()).unwrap();
         assert_eq!(stats["primary_rays"], 24 * 16);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        r: RenderArgs,
+    }
+
+    #[test]
+    fn render_with_the_octree_writes_a_png_with_a_silhouette() {
+        let dir = std::env::temp_dir().join(format!("fathom-svo-still-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let out = dir.join("s.png");
+        let cli = <Cli as clap::Parser>::parse_from([
+            "t",
+            "--preset",
+            "mandelbulb",
+            "--renderer",
+            "svo",
+            "--size",
+            "64x48",
+            "--threads",
+            "1",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        run(cli.r).unwrap();
+        let img = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (64, 48));
+        let centre = img.get_pixel(32, 24).0;
+        let corner = img.get_pixel(0, 0).0;
+        assert_ne!(
+            centre, corner,
+            "the bulb should cover the centre, not the corner"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 }

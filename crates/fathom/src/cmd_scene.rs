@@ -71,8 +71,9 @@ fn render(a: &SceneArgs) -> Result<String, String> {
             None,
         ),
         (None, Some(name)) => {
-            let p = presets::find(name)?;
-            (presets::load(name)?, format!("preset {name}"), Some(p.text))
+            let p = presets::find(name).map_err(|e| e.to_string())?;
+            let scene = presets::load(name).map_err(|e| e.to_string())?;
+            (scene, format!("preset {name}"), Some(p.text))
         }
         (None, None) => {
             return Err("give a scene FILE or `--preset NAME` (see `fathom scene --help`)".into());

@@ -1,11 +1,13 @@
 //! `fathom zoom`: the scale-adaptive sparse voxel octree explorer on an automated camera path
-//! (a point-of-recursion zoom or a tour), writing frames and per-frame stats.
+//! (a point-of-recursion zoom or a tour), writing frames and per-frame stats. The flags become
+//! a [`Zoom`] of the render layer, which runs the frame loop; this module writes the frames.
 
+use crate::args::{parse_bytes, parse_size};
 use clap::{Args, ValueEnum};
-use fathom_svo::stats::Summary;
-use fathom_svo::zoom::{self, Path, ZoomPreset};
-use fathom_svo::{Explorer, ExplorerConfig, FrameStats, Traversal};
-use serde::Serialize;
+use fathom_core::camera_path::{PATH_PRESETS, path_preset};
+use fathom_render::zoom::{Zoom, ZoomReport};
+use fathom_render::{OctreeSettings, RenderRequest};
+use fathom_svo::Traversal;
 use std::path::PathBuf;
 
 /// Traversal choice on the command line.
@@ -43,7 +45,7 @@ impl From<TraversalArg> for Traversal {
 pub struct ZoomArgs {
     /// Path preset: menger (zoom into the corner, a point of recursion), mandelbulb (zoom
     /// into a surface point), menger-tour (a flight around and into the sponge).
-    #[arg(long, default_value = "menger")]
+    #[arg(long, default_value = "menger", value_parser = clap::builder::PossibleValuesParser::new(PATH_PRESETS))]
     pub preset: String,
     /// Zoom factor from the first to the last frame (ratio of eye distances), >= 1.
     #[arg(long, default_value_t = 1e11)]
@@ -84,207 +86,63 @@ pub struct ZoomArgs {
     pub ssao: f32,
 }
 
-/// Which renderer `fathom render` uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum RendererKind {
-    /// The CPU sphere tracer.
-    Trace,
-    /// The sparse voxel octree, subdivided until settled at the view.
-    Svo,
-}
-
-/// `fathom render --renderer svo`: settles an octree at the scene's camera (root cube fitted
-/// to the scene inside [-4, 4]^3), renders it, applies the shared post effects (fog from the
-/// scene, `--ssao`) and writes the PNG (and the mask if asked).
-pub fn render_still(
-    scene: &fathom_core::Scene,
-    a: &crate::cmd_render::RenderArgs,
-) -> Result<(), String> {
-    let (width, height) = a.size;
-    let cfg = ExplorerConfig {
-        width,
-        height,
-        threads: a.threads.unwrap_or(2),
-        root: fathom_svo::RootSpec::Fit { half: 4.0 },
-        ..ExplorerConfig::default()
-    };
-    let out = fathom_trace::output::open_output(&a.output)?;
-    let mut ex = Explorer::new(scene, cfg)?;
-    let frames = ex.settle(&scene.camera, 400);
-    let (img, reqs, counts) = ex.render(&scene.camera);
-    ex.release_requests(&reqs);
-    let mut frame = img.to_frame();
-    if scene.render.fog > 0.0 {
-        let sky = scene.render.sky_bottom.map(|c| c as f32);
-        fathom_trace::post::fog(&mut frame, scene.render.fog as f32, sky);
-    }
-    if a.ssao > 0.0 {
-        let pa = scene.camera.frame().pixel_angle(height) as f32;
-        fathom_trace::post::ssao(&mut frame, a.ssao, pa);
-    }
-    fathom_trace::output::save_colour(&frame, out, &a.output)?;
-    if let Some(p) = &a.mask {
-        let f = fathom_trace::output::open_output(p)?;
-        fathom_trace::output::save_mask(&frame, f, p)?;
-    }
-    if !a.quiet {
-        eprintln!(
-            "svo: settled in {frames} frames, {} nodes, {:.1} nodes per ray",
-            ex.tree.counts().nodes,
-            counts[2] as f64 / counts[0].max(1) as f64
-        );
-    }
-    Ok(())
-}
-
-/// Parses `WIDTHxHEIGHT`.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("size `{s}` must look like 640x480"))?;
-    let p = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("size `{s}`: `{v}` is not a whole number of pixels"))
-    };
-    let (w, h) = (p(w)?, p(h)?);
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("size {w}x{h} is out of range (1..=16384 per side)"));
-    }
-    Ok((w, h))
-}
-
-/// Parses a byte count with an optional K/M/G suffix (powers of 1024).
-pub fn parse_bytes(s: &str) -> Result<usize, String> {
-    let t = s.trim();
-    let (num, mul) = match t.chars().last() {
-        Some('k' | 'K') => (&t[..t.len() - 1], 1usize << 10),
-        Some('m' | 'M') => (&t[..t.len() - 1], 1 << 20),
-        Some('g' | 'G') => (&t[..t.len() - 1], 1 << 30),
-        _ => (t, 1),
-    };
-    let v: f64 = num
-        .parse()
-        .map_err(|_| format!("memory `{s}` must be a number with an optional K, M or G suffix"))?;
-    if !(v.is_finite() && v > 0.0) || v * mul as f64 > 1e15 {
-        return Err(format!("memory `{s}` is out of range"));
-    }
-    Ok((v * mul as f64) as usize)
-}
-
-/// The JSON written by `--stats`.
-#[derive(Serialize)]
-pub struct ZoomReport {
-    pub preset: String,
-    pub traversal: Traversal,
-    pub width: u32,
-    pub height: u32,
-    pub depth: f64,
-    pub threads: usize,
-    pub fidelity: f64,
-    /// Why the zoom stopped early (precision limit), if it did.
-    pub stopped: Option<String>,
-    pub summary: Summary,
-    pub zoom: Vec<f64>,
-    pub frames: Vec<FrameStats>,
-}
-
-/// Checks the arguments and builds the preset and explorer settings.
-pub fn setup(a: &ZoomArgs) -> Result<(ZoomPreset, ExplorerConfig), String> {
-    if !(a.depth.is_finite() && a.depth >= 1.0) {
-        return Err(format!(
-            "--depth {} must be a finite zoom factor >= 1",
-            a.depth
-        ));
-    }
-    if !(a.ssao.is_finite() && (0.0..=4.0).contains(&a.ssao)) {
-        return Err(format!("--ssao {} is out of range [0, 4]", a.ssao));
-    }
-    if a.frames == 0 || a.frames > 10_000_000 {
-        return Err(format!(
-            "--frames {} is out of range 1..=10000000",
-            a.frames
-        ));
-    }
+/// The zoom these flags describe, checked.
+pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
     let (width, height) = parse_size(&a.size)?;
-    let max_memory = parse_bytes(&a.max_memory)?;
-    let p = zoom::preset(&a.preset)?;
-    let cfg = ExplorerConfig {
-        width,
-        height,
-        fidelity: a.fidelity,
-        threads: a.threads,
-        max_memory,
-        traversal: a.traversal.into(),
-        subdivide_ms: a.subdivide_ms,
-        unify_every: a.unify_every,
-        root: p.root,
-        ..ExplorerConfig::default()
+    let z = Zoom {
+        depth: a.depth,
+        frames: a.frames,
+        request: RenderRequest {
+            width,
+            height,
+            ssao: a.ssao,
+            threads: Some(a.threads),
+            backend: fathom_render::Backend::Octree,
+            octree: OctreeSettings {
+                fidelity: a.fidelity,
+                max_memory: parse_bytes(&a.max_memory)?,
+                traversal: a.traversal.into(),
+                subdivide_ms: a.subdivide_ms,
+                unify_every: a.unify_every,
+                ..OctreeSettings::default()
+            },
+            ..RenderRequest::default()
+        },
     };
-    cfg.validate()?;
-    Ok((p, cfg))
+    z.validate().map_err(|e| e.to_string())?;
+    z.request.validate().map_err(|e| e.to_string())?;
+    Ok(z)
 }
 
-/// Runs a zoom; `on_frame` sees each frame (for progress). Returns the report.
+/// Runs a zoom, writing frames if `a.output` is set and a progress line every 100 frames
+/// unless `quiet`. Returns the report.
 pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
-    let (p, cfg) = setup(a)?;
+    let z = zoom(a)?;
+    let preset = path_preset(&a.preset).map_err(|e| e.to_string())?;
     if let Some(dir) = &a.output {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
-    let mut ex = Explorer::new(&p.scene, cfg.clone())?;
-    let mut frames = Vec::with_capacity(a.frames);
-    let mut zooms = Vec::with_capacity(a.frames);
-    let mut stopped = None;
-    for i in 0..a.frames {
-        let cam = p.camera(i, a.frames, a.depth);
-        let z = p.zoom_at(i, a.frames, a.depth);
-        if let Path::Zoom { target, .. } = &p.path {
-            let pa = cam.frame().pixel_angle(cfg.height);
-            let dist = (cam.eye - *target).length();
-            if let Err(e) = zoom::precision_check(dist, ex.tree.root_size, pa, cfg.fidelity, z) {
-                stopped = Some(e);
-                break;
+    let report = z
+        .run(&preset, a.output.is_some(), |i, zoom, frame, st| {
+            if let (Some(dir), Some(f)) = (&a.output, frame) {
+                let path = dir.join(format!("frame_{i:05}.png"));
+                let file = fathom_trace::output::open_output(&path).map_err(|e| e.to_string())?;
+                fathom_trace::output::save_colour(f, file, &path).map_err(|e| e.to_string())?;
             }
-        }
-        let (img, st) = ex.step(&cam);
-        if let Some(dir) = &a.output {
-            let path = dir.join(format!("frame_{i:05}.png"));
-            image::save_buffer(
-                &path,
-                &img.to_srgb8(),
-                img.width,
-                img.height,
-                image::ColorType::Rgb8,
-            )
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        }
-        if !quiet && (i % 100 == 0 || i + 1 == a.frames) {
-            eprintln!(
-                "frame {i}: zoom {z:.2e}, {:.1} ms, {:.1} nodes/ray, {} nodes, {} bricks",
-                st.frame_ms, st.nodes_per_ray, st.node_count, st.brick_count
-            );
-        }
-        frames.push(st);
-        zooms.push(z);
-    }
-    if let Some(e) = &stopped {
+            if !quiet && (i % 100 == 0 || i + 1 == a.frames) {
+                eprintln!(
+                    "frame {i}: zoom {zoom:.2e}, {:.1} ms, {:.1} nodes/ray, {} nodes, {} bricks",
+                    st.frame_ms, st.nodes_per_ray, st.node_count, st.brick_count
+                );
+            }
+            Ok(())
+        })
+        .map_err(|e| e.to_string())?;
+    if let Some(e) = &report.stopped {
         eprintln!("fathom: stopped: {e}");
     }
-    let summary = Summary::new(&frames, &zooms, cfg.brick_period);
-    Ok(ZoomReport {
-        preset: p.name.into(),
-        traversal: cfg.traversal,
-        width: cfg.width,
-        height: cfg.height,
-        depth: a.depth,
-        threads: cfg.threads,
-        fidelity: cfg.fidelity,
-        stopped,
-        summary,
-        zoom: zooms,
-        frames,
-    })
+    Ok(report)
 }
 
 pub fn run(a: ZoomArgs) -> Result<(), String> {
@@ -317,17 +175,6 @@ pub fn run(a: ZoomArgs) -> Result<(), String> {
 mod tests {
     use super::*;
 
-    #[test]
-    fn sizes_and_memory_parse_with_clear_errors() {
-        assert_eq!(parse_size("640x480").unwrap(), (640, 480));
-        assert!(parse_size("640").unwrap_err().contains("640x480"));
-        assert!(parse_size("0x10").unwrap_err().contains("out of range"));
-        assert_eq!(parse_bytes("1G").unwrap(), 1 << 30);
-        assert_eq!(parse_bytes("512M").unwrap(), 512 << 20);
-        assert!(parse_bytes("lots").is_err());
-        assert!(parse_bytes("-1").is_err());
-    }
-
     fn args() -> ZoomArgs {
         ZoomArgs {
             depth: 1e3,
@@ -344,19 +191,19 @@ mod tests {
     fn bad_zoom_arguments_are_refused() {
         let mut a = args();
         a.depth = 0.5;
-        assert!(setup(&a).err().unwrap().contains("--depth"));
+        assert!(zoom(&a).err().unwrap().contains("--depth"));
         a.depth = 10.0;
         a.frames = 0;
-        assert!(setup(&a).err().unwrap().contains("--frames"));
+        assert!(zoom(&a).err().unwrap().contains("--frames"));
         a.frames = 3;
         a.fidelity = 100.0;
-        assert!(setup(&a).err().unwrap().contains("fidelity"));
+        assert!(zoom(&a).err().unwrap().contains("fidelity"));
         a.fidelity = 1.0;
         a.unify_every = 0;
-        assert!(setup(&a).err().unwrap().contains("unify-every"));
+        assert!(zoom(&a).err().unwrap().contains("unify-every"));
         a.unify_every = 4;
         a.max_memory = "1K".into();
-        assert!(setup(&a).err().unwrap().contains("max memory"));
+        assert!(zoom(&a).err().unwrap().contains("max memory"));
     }
 
     #[test]
@@ -368,48 +215,5 @@ mod tests {
         let msg = r.stopped.expect("the zoom should have stopped");
         assert!(msg.contains("precision limit"), "{msg}");
         assert!(r.frames.len() < 40 && r.frames.len() > 10);
-    }
-}
-
-#[cfg(test)]
-mod render_tests {
-    use crate::cmd_render::RenderArgs;
-    use clap::Parser;
-
-    #[derive(Parser)]
-    struct Cli {
-        #[command(flatten)]
-        r: RenderArgs,
-    }
-
-    #[test]
-    fn render_with_the_octree_writes_a_png_with_a_silhouette() {
-        let dir = std::env::temp_dir().join(format!("fathom-svo-still-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let out = dir.join("s.png");
-        let cli = Cli::parse_from([
-            "t",
-            "--preset",
-            "mandelbulb",
-            "--renderer",
-            "svo",
-            "--size",
-            "64x48",
-            "--threads",
-            "1",
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-        crate::cmd_render::run(cli.r).unwrap();
-        let img = image::open(&out).unwrap().to_rgb8();
-        assert_eq!(img.dimensions(), (64, 48));
-        let centre = img.get_pixel(32, 24).0;
-        let corner = img.get_pixel(0, 0).0;
-        assert_ne!(
-            centre, corner,
-            "the bulb should cover the centre, not the corner"
-        );
-        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -1,11 +1,13 @@
 //! The `fathom` command: render, list, print scenes, benchmark.
 //!
 //! Each subcommand lives in its own module; this file only parses the command line and
-//! dispatches. Run with no arguments it renders the default preset and says where it went.
+//! dispatches. The modules are thin: they turn flags into a `fathom_render::RenderRequest` (or
+//! a zoom), call the render layer's session, and write files. Run with no arguments it renders the default preset and says where it went.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod args;
 mod bench;
 mod bench_eval;
 mod bench_gpu;
@@ -18,7 +20,6 @@ mod cmd_mesh;
 mod cmd_render;
 mod cmd_scene;
 mod cmd_zoom;
-mod render_gpu;
 
 /// Explore infinite 3D worlds built from distance fields: fractals, CSG trees folded into
 /// iterated function systems, rendered by sphere tracing.

@@ -11,7 +11,7 @@ use crate::real::{Mask, Real};
 use crate::vec3::V3;
 
 /// Squared radius beyond which a lane stops iterating (its point only grows from there).
-const BAIL2: f64 = 1e8;
+use crate::shared::IFS_BAIL2 as BAIL2;
 
 /// `1 / sqrt(3)`.
 const INV_SQRT3: f64 = 0.577_350_269_189_625_8;

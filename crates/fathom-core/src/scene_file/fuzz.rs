@@ -164,7 +164,9 @@ fn check_outcome(text: &str) -> Result<(), TestCaseError> {
             );
             prop_assert!(!msg.is_empty());
         }
-        Err(SceneFileError::Invalid { msg, .. }) => prop_assert!(!msg.is_empty()),
+        Err(SceneFileError::Invalid { error, .. }) => {
+            prop_assert!(!error.to_string().is_empty())
+        }
         Err(e) => prop_assert!(false, "unexpected error kind: {e}"),
     }
     Ok(())

@@ -89,3 +89,72 @@ fn a_type_mismatch_is_named() {
     let e = validate(&src).expect_err("a mistyped parameter must not validate");
     assert!(e.to_string().contains("Sphere"), "{e}");
 }
+
+#[test]
+fn rust_mirrors_of_the_wgsl_structs_have_the_same_layout() {
+    // The uniform block and G-buffer pixel are declared in trace.wgsl and mirrored in
+    // passes.rs: every field's name and offset, and the struct size, must agree with naga's
+    // layout of the WGSL declaration.
+    let module = validate(&source()).unwrap();
+    for (rust_name, size, fields) in crate::passes::rust_layouts() {
+        let wgsl_name = rust_name.strip_prefix("Gpu").unwrap_or(rust_name);
+        let (members, span) = module
+            .types
+            .iter()
+            .find_map(|(_, t)| match &t.inner {
+                naga::TypeInner::Struct { members, span }
+                    if t.name.as_deref() == Some(wgsl_name) =>
+                {
+                    Some((members, *span))
+                }
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("no struct {wgsl_name} in the WGSL"));
+        let wgsl: Vec<(String, u32)> = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+            .collect();
+        let rust: Vec<(String, u32)> = fields
+            .iter()
+            .map(|(n, o, _)| (n.to_string(), *o as u32))
+            .collect();
+        assert_eq!(
+            rust, wgsl,
+            "{rust_name} vs WGSL {wgsl_name}: fields and offsets"
+        );
+        assert_eq!(size as u32, span, "{rust_name} vs WGSL {wgsl_name}: size");
+        // Each field fills the space up to the next (no hidden padding on either side).
+        for (k, (n, o, s)) in fields.iter().enumerate() {
+            let next = fields.get(k + 1).map_or(size, |f| f.1);
+            assert_eq!(o + s, next, "{rust_name}.{n} leaves a gap");
+        }
+    }
+}
+
+#[test]
+fn shared_constants_are_generated_not_typed_into_wgsl_files() {
+    // A constant of fathom_core::shared written into a .wgsl file by hand could drift from
+    // Rust; it must come only from the generated declarations.
+    for c in fathom_core::shared::WGSL_CONSTANTS {
+        for f in families() {
+            assert!(
+                !f.source.contains(&format!("const {}:", c.name)),
+                "{} declared in the {} WGSL",
+                c.name,
+                f.noun
+            );
+        }
+        for (file, src) in [
+            ("common", COMMON),
+            ("interp", INTERP),
+            ("trace", TRACE),
+            ("eval_points", EVAL_POINTS),
+        ] {
+            assert!(
+                !src.contains(&format!("const {}:", c.name)),
+                "{} declared in {file}.wgsl",
+                c.name
+            );
+        }
+    }
+}

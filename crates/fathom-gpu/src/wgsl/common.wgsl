@@ -7,8 +7,8 @@
 // The parameter buffer, converted to f32.
 @group(0) @binding(1) var<storage, read> params: array<f32>;
 
-// Orbit trap of a point no loop has touched (eval::NO_TRAP).
-const NO_TRAP: f32 = 1000.0;
+// NO_TRAP, TINY, IFS_BAIL2, MAX_STACK, MAX_EXECUTED, OMEGA, SHADOW_STEPS, AO_SAMPLES and the
+// prepass levels come from fathom_core::shared (generated ahead of this file).
 const PI: f32 = 3.14159265358979;
 
 // A value of the distance field: distance, materials and blend, orbit trap (value.rs).

@@ -93,7 +93,6 @@ fn frac_Mandelbox(c: vec3f, scale: f32, min_radius: f32, fixed_radius: f32, fold
 
 // --- IFS fractals (fractals/ifs.rs, koch.rs) ---
 
-const IFS_BAIL2: f32 = 1e8;
 const INV_SQRT3: f32 = 0.5773502691896258;
 
 fn scale_about(p: vec3f, scale: f32, offset: vec3f) -> vec3f {

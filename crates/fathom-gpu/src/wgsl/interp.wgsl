@@ -1,10 +1,8 @@
 // The tape interpreter (mirrors fathom-core eval.rs; the encoding is docs/tape.md). The
 // `op_*` dispatch functions it calls are generated in Rust from the registry tables.
 
-const MAX_STACK: u32 = 34u;
-// Bound on executed instructions: the longest tape plus the longest IFS loop, so a corrupt
-// tape cannot hang the device.
-const MAX_EXECUTED: u32 = 16384u + 256u * 66u;
+// MAX_STACK (stack depth) and MAX_EXECUTED (the bound on executed instructions, so a corrupt
+// tape cannot hang the device) come from fathom_core::shared.
 
 // The stacks live in private memory: zero-initialised once per invocation rather than on every
 // call of `eval_tape` (a function-local array would be cleared each time). A valid tape always

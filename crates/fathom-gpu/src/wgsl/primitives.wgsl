@@ -4,7 +4,6 @@
 // missing or mistyped function fails validation naming the entry.
 // `select(b, a, m)` below is the CPU's `S::select(m, a, b)`.
 
-const TINY: f32 = 1e-30;
 
 fn len2(x: f32, y: f32) -> f32 {
     return sqrt(x * x + y * y);

@@ -42,12 +42,9 @@ struct GPx {
 // Distance evaluations: prepass, depth pass, colour pass.
 @group(1) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 4>;
 
-const OMEGA: f32 = 1.5;
-const SHADOW_STEPS: u32 = 96u;
-const AO_SAMPLES: u32 = 5u;
-// Block size of prepass level l: 8, 4, 2 pixels.
+// Block size of prepass level l: 8, 4, 2 pixels (fathom_core::shared::PREPASS_LEVELS).
 fn level_block(l: u32) -> u32 {
-    return 8u >> l;
+    return PREPASS_COARSEST >> l;
 }
 
 struct Ray {

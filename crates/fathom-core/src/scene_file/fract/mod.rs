@@ -505,7 +505,7 @@ pub fn parse(text: &str, origin: &str) -> Result<Imported, SceneFileError> {
             .get("camera")
             .or(main.map.get("fov"))
             .map_or((1, 1), |s| (s.line, s.col));
-        r.err(line, col, msg)
+        r.err(line, col, msg.to_string())
     })?;
     let mut scene = Scene::new(Node::new(shape).op(Call::new(Transform::Rotate)
         .with("axis", &[1.0, 0.0, 0.0])
@@ -552,9 +552,9 @@ pub fn parse(text: &str, origin: &str) -> Result<Imported, SceneFileError> {
              animations have no place in a fathom scene)"
         ));
     }
-    scene.validate().map_err(|msg| SceneFileError::Invalid {
+    scene.validate().map_err(|error| SceneFileError::Invalid {
         origin: origin.into(),
-        msg,
+        error,
     })?;
     Ok(Imported {
         scene,

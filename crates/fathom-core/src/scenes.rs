@@ -1,9 +1,13 @@
-//! Code-built scenes for the zoom presets and the tests: the Menger sponge, the Mandelbox and a
-//! sphere. (The Mandelbulb comes from fathom-core's presets.)
+//! Code-built scenes for the zoom presets, benchmarks and tests of every crate: the Menger
+//! sponge spanning exactly `[-1, 1]^3`, the Mandelbox and a sphere. (The scene-file presets are
+//! in [`crate::presets`].)
 
-use fathom_core::fractals::Fractal;
-use fathom_core::primitives::Primitive;
-use fathom_core::scene::{Call, Material, Node, Scene};
+use crate::combine::Combine;
+use crate::fractals::Fractal;
+use crate::primitives::Primitive;
+use crate::registry::Family;
+use crate::scene::{Call, Material, Node, Scene};
+use crate::transforms::Transform;
 use glam::DVec3;
 
 /// The Menger sponge spanning `[-1, 1]^3` (fathom-core's `Menger` estimator, a distance
@@ -34,10 +38,33 @@ pub fn sphere(r: f64) -> Scene {
     Scene::new(Node::new(Call::new(Primitive::Sphere).with("radius", &[r])))
 }
 
+/// A 100-node tree mixing every primitive, several operators and every combine.
+pub fn hundred_node_scene() -> Scene {
+    let prims = Primitive::all();
+    let combines = Combine::all();
+    let mut root = Node::new(Primitive::Sphere);
+    for i in 0..9 {
+        let mut branch = Node::new(prims[(i * 7 + 1) % prims.len()])
+            .combine(combines[i % combines.len()])
+            .op(Call::new(Transform::Translate).with("offset", &[i as f64 * 0.3, 0.0, 0.0]));
+        for j in 0..10 {
+            let k = i * 10 + j;
+            branch = branch.child(
+                Node::new(prims[k % prims.len()])
+                    .combine(combines[k % combines.len()])
+                    .op(Call::new(Transform::Rotate).with("angle", &[k as f64]))
+                    .op(Call::new(Transform::Scale).with("factor", &[0.5])),
+            );
+        }
+        root = root.child(branch);
+    }
+    Scene::new(root)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fathom_core::Tape;
+    use crate::Tape;
 
     #[test]
     fn menger_has_its_holes_and_corners() {
@@ -58,5 +85,12 @@ mod tests {
         for p in [[3.0, 0.0, 0.0], [0.0, 3.0, 0.0], [2.2, 2.2, 2.2]] {
             assert!(b.eval_f64(p).d > 0.0, "the Mandelbox reaches {p:?}");
         }
+    }
+
+    #[test]
+    fn hundred_node_scene_has_a_hundred_nodes_and_compiles() {
+        let s = hundred_node_scene();
+        assert_eq!(s.root.count(), 100);
+        Tape::compile(&s).unwrap();
     }
 }

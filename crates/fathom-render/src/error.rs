@@ -1,0 +1,44 @@
+//! [`RenderError`]: everything a session can refuse or fail at, each variant carrying the typed
+//! error of the layer that found it (the request, the scene and the node path, the tape, the
+//! camera, a renderer), so a window can point at the bad field and a command line can print it.
+
+use crate::request::RequestError;
+use fathom_core::camera::CameraError;
+use fathom_core::scene::SceneError;
+use fathom_core::tape::CompileError;
+use fathom_gpu::GpuError;
+use fathom_svo::OctreeError;
+use fathom_trace::TraceError;
+
+/// Why a session could not render a frame or take a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Request(#[from] RequestError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Compile(#[from] CompileError),
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    #[error(transparent)]
+    Trace(TraceError),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Octree(#[from] OctreeError),
+    /// The frame was abandoned through its [`crate::CancelToken`]; the session is unchanged.
+    #[error("the render was cancelled")]
+    Cancelled,
+    #[error("cannot start {threads} worker threads: {message}")]
+    Threads { threads: usize, message: String },
+}
+
+impl From<TraceError> for RenderError {
+    fn from(e: TraceError) -> RenderError {
+        match e {
+            TraceError::Cancelled => RenderError::Cancelled,
+            e => RenderError::Trace(e),
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! fathom-render: the render layer between the renderers (fathom-trace, fathom-gpu,
+//! fathom-svo) and every front end (the `fathom` command, the explorer window, render-farm
+//! tasks). The renderers know nothing of it; front ends parse their input into a
+//! [`RenderRequest`] and call a [`Session`].
+//!
+//! - [`request`]: [`RenderRequest`], one serialisable value for what to render (size,
+//!   projection, supersampling, prepass, tracer rule, SSAO, fog, backend, threads, region);
+//! - [`session`]: [`Session`], the scene, its tape and each backend's state; `set_scene` says
+//!   whether an edit re-baked parameters or recompiled; `render` returns a frame and [`Stats`];
+//! - [`control`]: cancellation ([`CancelToken`], checked between tiles) and progress;
+//! - [`stats`]: [`Stats`], one statistics type serialised with the same keys for every backend;
+//! - [`zoom`]: the octree's zoom loop with its precision guard;
+//! - `gpu`, `octree`: the two backends with state of their own.
+//!
+//! Regions (a rectangle of a larger image): the CPU tracer renders only the tiles a region
+//! needs, bit-identical to the same pixels of the whole render (SSAO and prepass borders
+//! included); the GPU and octree backends render the whole frame and crop it (the same
+//! pixels, no time saved).
+
+pub mod control;
+pub mod error;
+mod gpu;
+mod octree;
+pub mod request;
+pub mod session;
+pub mod stats;
+pub mod zoom;
+
+pub use control::{CancelToken, Control, Progress};
+pub use error::RenderError;
+pub use request::{Backend, OctreeSettings, RenderRequest, RequestError, TracerRule};
+pub use session::{Counters, Rendered, SceneChange, Session};
+pub use stats::Stats;
+
+#[cfg(test)]
+mod tests;

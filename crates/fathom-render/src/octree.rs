@@ -1,0 +1,130 @@
+//! The octree backend of a session: one explorer, kept while the scene and the octree settings
+//! stay the same (so a still view settles once and a zoom or a window steps the same tree),
+//! rebuilt when either changes. A still frame settles the tree at the view (subdividing until
+//! no leaf asks for more, within the request's frame limit) and renders it; a stepped frame
+//! renders the tree as it is and subdivides within a time budget. Frames go through the shared
+//! post effects; regions are cropped from the whole frame.
+
+use crate::control::Control;
+use crate::request::RenderRequest;
+use crate::session::{Counters, Rendered, report_done};
+use crate::stats::{OctreeStats, Stats, Timings};
+use fathom_core::frame::{Frame, Rect};
+use fathom_core::{Camera, Scene};
+use fathom_svo::{Explorer, ExplorerConfig, FrameStats, OctreeError, SvoImage};
+use fathom_trace::post::{self, PostParams};
+use std::time::Instant;
+
+pub(crate) struct OctreeBackend {
+    pub explorer: Explorer,
+    key: (u64, ExplorerConfig),
+}
+
+impl OctreeBackend {
+    /// The explorer for `scene` (of shading generation `generation`) and `req`'s settings,
+    /// building a new one when either changed.
+    pub fn get<'a>(
+        slot: &'a mut Option<OctreeBackend>,
+        scene: &Scene,
+        generation: u64,
+        req: &RenderRequest,
+        counters: &mut Counters,
+    ) -> Result<&'a mut OctreeBackend, OctreeError> {
+        let cfg = req.octree_config();
+        let key = (generation, cfg.clone());
+        if slot.as_ref().is_none_or(|o| o.key != key) {
+            *slot = None;
+            let explorer = Explorer::new(scene, cfg)?;
+            counters.octrees_built += 1;
+            *slot = Some(OctreeBackend { explorer, key });
+        }
+        Ok(slot.as_mut().expect("built above"))
+    }
+
+    /// Settles the tree at `camera` and renders it.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        req: &RenderRequest,
+        control: &Control,
+    ) -> Result<Rendered, crate::RenderError> {
+        let t0 = Instant::now();
+        let mut settle_frames = 0;
+        for _ in 0..req.octree.settle_frames {
+            if control.cancelled() {
+                return Err(crate::RenderError::Cancelled);
+            }
+            let (_, reqs, _) = self.explorer.render(camera);
+            if reqs.is_empty() {
+                break;
+            }
+            self.explorer.subdivide(reqs, f64::INFINITY);
+            settle_frames += 1;
+        }
+        let ms_subdivide = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = Instant::now();
+        let (img, reqs, counts) = self.explorer.render(camera);
+        self.explorer.release_requests(&reqs);
+        let ms_render = t1.elapsed().as_secs_f64() * 1e3;
+        let t2 = Instant::now();
+        let frame = finish(&img, scene, camera, req);
+        let tree = &self.explorer.tree;
+        let c = tree.counts();
+        let stats = Stats {
+            renderer: "svo",
+            width: frame.width,
+            height: frame.height,
+            primary_rays: counts[0],
+            hits: counts[1],
+            ms: Timings {
+                trace_and_shade: ms_render,
+                subdivide: Some(ms_subdivide),
+                post: t2.elapsed().as_secs_f64() * 1e3,
+                ..Timings::default()
+            },
+            octree: Some(OctreeStats {
+                settle_frames,
+                nodes: c.nodes as u64,
+                bricks: c.bricks as u64,
+                nodes_per_ray: counts[2] as f64 / counts[0].max(1) as f64,
+                arena_bytes: tree.arena_bytes() as u64,
+            }),
+            ..Stats::default()
+        };
+        report_done(control);
+        Ok(Rendered { frame, stats })
+    }
+
+    /// One stepped frame (render the tree as it is, subdivide, maybe unify).
+    pub fn step(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        req: &RenderRequest,
+        want_frame: bool,
+    ) -> (Option<Frame>, FrameStats) {
+        let (img, st) = self.explorer.step(camera);
+        let frame = want_frame.then(|| finish(&img, scene, camera, req));
+        (frame, st)
+    }
+}
+
+/// The shared post effects on an octree image, then the region's crop.
+fn finish(img: &SvoImage, scene: &Scene, camera: &Camera, req: &RenderRequest) -> Frame {
+    let frame = img.to_frame();
+    let r = &scene.render;
+    let params = PostParams {
+        ssao: req.ssao,
+        pixel_angle: camera.frame().pixel_angle(img.height) as f32,
+        fog: r.fog as f32,
+        fog_colour: r.sky_bottom.map(|c| c as f32),
+        supersample: req.supersample,
+    };
+    let whole = Rect::full(img.width, img.height);
+    let frame = post::finish_view(frame, whole, whole, &params);
+    match req.region {
+        Some(r) => frame.crop(r),
+        None => frame,
+    }
+}

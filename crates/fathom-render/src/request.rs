@@ -1,0 +1,303 @@
+//! [`RenderRequest`]: everything that says how to render one frame (size, projection,
+//! supersampling, tracer rule, prepass, SSAO, fog, backend, threads, and optionally a region of
+//! the image), as one serialisable value. The command line, the window and a farm task all
+//! build one of these and hand it to a [`crate::Session`]; a farm writes it into its manifest.
+
+use fathom_core::Projection;
+use fathom_core::camera_path::ExactCube;
+use fathom_core::frame::Rect;
+use fathom_svo::{ExplorerConfig, OctreeError, RootSpec, Traversal};
+use fathom_trace::{Method, Options, OptionsError};
+use serde::{Deserialize, Serialize};
+
+/// Which renderer draws the frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// The CPU sphere tracer (f32 packets, f64 for deep views).
+    #[default]
+    Trace,
+    /// The WGSL tape interpreter through wgpu; views past f32 precision fall back to the CPU
+    /// tracer (the frame's [`crate::Stats::note`] says so).
+    Gpu,
+    /// The sparse voxel octree, subdivided until settled at the view.
+    Octree,
+}
+
+impl Backend {
+    /// The name used in stats and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Trace => "trace",
+            Backend::Gpu => "gpu",
+            Backend::Octree => "svo",
+        }
+    }
+}
+
+/// The sphere-tracing step rule.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TracerRule {
+    /// Step by the distance bound (Hart).
+    Basic,
+    /// Over-relaxed steps with a safe fallback (Keinert et al. 2014).
+    #[default]
+    Enhanced,
+}
+
+/// Settings of the octree backend.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OctreeSettings {
+    /// Voxels may project to this many pixels, [0.25, 16].
+    pub fidelity: f64,
+    /// Memory budget of the octree in bytes (at least 1 MiB).
+    pub max_memory: usize,
+    /// Traversal of the octree.
+    pub traversal: Traversal,
+    /// The scene's exact bounding cube as the root (else a cube fitted inside [-4, 4]^3).
+    pub root: Option<ExactCube>,
+    /// Most frames spent subdividing at a still view before rendering it.
+    pub settle_frames: usize,
+    /// Subdivision time per frame in ms, for stepped frames (zooms and the window).
+    pub subdivide_ms: f64,
+    /// Unify (unload bricks no ray visited) every this many stepped frames.
+    pub unify_every: u32,
+}
+
+impl Default for OctreeSettings {
+    fn default() -> Self {
+        OctreeSettings {
+            fidelity: 1.0,
+            max_memory: 1 << 30,
+            traversal: Traversal::Neighbour,
+            root: None,
+            settle_frames: 400,
+            subdivide_ms: 12.0,
+            unify_every: 4,
+        }
+    }
+}
+
+/// What to render: one frame, or one region of it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RenderRequest {
+    /// Size of one eye's view in pixels (the output is twice as wide or tall for stereo).
+    pub width: u32,
+    pub height: u32,
+    /// Mono, side-by-side or omni-directional stereo.
+    pub projection: Projection,
+    /// Samples per pixel along each axis, [1, 4].
+    pub supersample: u32,
+    /// Run the cone-marching depth prepass (tracer and GPU).
+    pub prepass: bool,
+    /// Sphere-tracing step rule (tracer; the GPU always uses the enhanced rule).
+    pub tracer: TracerRule,
+    /// Screen-space ambient occlusion strength, [0, 4] (0: off; never for ODS).
+    pub ssao: f32,
+    /// Distance fog density per world unit, overriding the scene's `render.fog`, [0, 1e6].
+    pub fog: Option<f64>,
+    /// Depth, ids and steps only: no colouring, no SSAO, no fog (tracer only).
+    pub geometry_only: bool,
+    /// The renderer.
+    pub backend: Backend,
+    /// Worker threads of the CPU renderers (default: all cores), [1, 1024].
+    pub threads: Option<usize>,
+    /// Only this rectangle of the output image (the whole image when absent).
+    pub region: Option<Rect>,
+    /// Octree settings (used by [`Backend::Octree`]).
+    pub octree: OctreeSettings,
+}
+
+impl Default for RenderRequest {
+    fn default() -> Self {
+        RenderRequest {
+            width: 1280,
+            height: 720,
+            projection: Projection::Mono,
+            supersample: 1,
+            prepass: true,
+            tracer: TracerRule::Enhanced,
+            ssao: 0.0,
+            fog: None,
+            geometry_only: false,
+            backend: Backend::Trace,
+            threads: None,
+            region: None,
+            octree: OctreeSettings::default(),
+        }
+    }
+}
+
+/// Why a request was refused, before anything was allocated or rendered.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RequestError {
+    /// Size, projection, supersampling, SSAO or region out of range.
+    #[error(transparent)]
+    Options(#[from] OptionsError),
+    #[error("threads = {0} is out of range [1, 1024]")]
+    Threads(usize),
+    #[error("fog = {0} is out of range [0, 1e6] (density per world unit)")]
+    Fog(f64),
+    #[error(
+        "stereo is not supported by the octree renderer (it renders one mono view); use the sphere tracer for stereo"
+    )]
+    OctreeStereo,
+    #[error("the octree renderer does not render geometry-only frames")]
+    OctreeGeometryOnly,
+    #[error("octree settle_frames = {0} is out of range [0, 100000]")]
+    SettleFrames(usize),
+    #[error(transparent)]
+    Octree(#[from] OctreeError),
+}
+
+impl RenderRequest {
+    /// The CPU tracer's options for this request (also the size limits every backend obeys).
+    pub fn trace_options(&self) -> Options {
+        Options {
+            width: self.width,
+            height: self.height,
+            method: match self.tracer {
+                TracerRule::Basic => Method::Basic,
+                TracerRule::Enhanced => Method::Enhanced,
+            },
+            prepass: self.prepass,
+            supersample: self.supersample,
+            geometry_only: self.geometry_only,
+            ssao: self.ssao,
+            projection: self.projection,
+        }
+    }
+
+    /// Checks every field against its documented range.
+    pub fn validate(&self) -> Result<(), RequestError> {
+        let o = self.trace_options();
+        o.validate()?;
+        if let Some(r) = self.region {
+            o.check_region(r)?;
+        }
+        if let Some(t) = self.threads
+            && !(1..=1024).contains(&t)
+        {
+            return Err(RequestError::Threads(t));
+        }
+        if let Some(f) = self.fog
+            && !(f.is_finite() && (0.0..=1e6).contains(&f))
+        {
+            return Err(RequestError::Fog(f));
+        }
+        if self.backend == Backend::Octree {
+            if self.projection != Projection::Mono {
+                return Err(RequestError::OctreeStereo);
+            }
+            if self.geometry_only {
+                return Err(RequestError::OctreeGeometryOnly);
+            }
+            if self.octree.settle_frames > 100_000 {
+                return Err(RequestError::SettleFrames(self.octree.settle_frames));
+            }
+            self.octree_config().validate()?;
+        }
+        Ok(())
+    }
+
+    /// The octree explorer's settings for this request (supersampled size; threads default to
+    /// the machine's cores; the root is the exact cube when given, else fitted in [-4, 4]^3).
+    pub fn octree_config(&self) -> ExplorerConfig {
+        let o = &self.octree;
+        ExplorerConfig {
+            width: self.width * self.supersample,
+            height: self.height * self.supersample,
+            fidelity: o.fidelity,
+            threads: self
+                .threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get())),
+            max_memory: o.max_memory,
+            traversal: o.traversal,
+            subdivide_ms: o.subdivide_ms,
+            unify_every: o.unify_every,
+            root: match o.root {
+                Some(c) => RootSpec::from_cube(Some(c)),
+                None => RootSpec::Fit { half: 4.0 },
+            },
+            ..ExplorerConfig::default()
+        }
+    }
+
+    /// Size of the output image (both eyes for stereo).
+    pub fn output_size(&self) -> (u32, u32) {
+        self.projection.output_size(self.width, self.height)
+    }
+
+    /// The rectangle this request renders (its region, or the whole output image).
+    pub fn rect(&self) -> Rect {
+        let (w, h) = self.output_size();
+        self.region.unwrap_or(Rect::full(w, h))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn requests_round_trip_through_json_and_refuse_bad_values() {
+        let r = RenderRequest {
+            projection: Projection::SideBySide {
+                eye_separation: 0.1,
+            },
+            region: Some(Rect {
+                x: 8,
+                y: 0,
+                width: 16,
+                height: 4,
+            }),
+            backend: Backend::Gpu,
+            ..RenderRequest::default()
+        };
+        let text = serde_json::to_string(&r).unwrap();
+        assert_eq!(serde_json::from_str::<RenderRequest>(&text).unwrap(), r);
+        assert!(serde_json::from_str::<RenderRequest>(r#"{"widht": 3}"#).is_err());
+        r.validate().unwrap();
+        let bad = |f: &dyn Fn(&mut RenderRequest)| {
+            let mut b = RenderRequest::default();
+            f(&mut b);
+            b.validate().unwrap_err()
+        };
+        assert!(matches!(
+            bad(&|b| b.threads = Some(0)),
+            RequestError::Threads(0)
+        ));
+        assert!(matches!(
+            bad(&|b| b.fog = Some(f64::NAN)),
+            RequestError::Fog(_)
+        ));
+        assert!(matches!(
+            bad(&|b| b.width = 0),
+            RequestError::Options(OptionsError::Empty { .. })
+        ));
+        let e = bad(&|b| {
+            b.region = Some(Rect {
+                x: 1270,
+                y: 0,
+                width: 20,
+                height: 1,
+            })
+        });
+        assert!(
+            e.to_string().contains("not inside the 1280x720 image"),
+            "{e}"
+        );
+        assert!(matches!(
+            bad(&|b| {
+                b.backend = Backend::Octree;
+                b.projection = Projection::Ods {
+                    eye_separation: 0.1,
+                }
+            }),
+            RequestError::OctreeStereo
+        ));
+    }
+}

@@ -1,0 +1,281 @@
+//! The session's promises: regions equal the crop of the whole render, parameter edits compile
+//! nothing (CPU and GPU) and structure edits build no pipeline, a cancelled frame stops within
+//! the tiles already in flight and leaves the session as it was.
+
+use crate::RenderError;
+use crate::control::{CancelToken, Control, Progress};
+use crate::request::{Backend, RenderRequest};
+use crate::session::{SceneChange, Session};
+use fathom_core::frame::Rect;
+use fathom_core::presets;
+use fathom_core::{Camera, Projection};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The `k`-th of `n` nearly equal parts of `0..len`.
+fn part(len: u32, n: u32, k: u32) -> (u32, u32) {
+    let a = len * k / n;
+    (a, len * (k + 1) / n - a)
+}
+
+fn grid(w: u32, h: u32) -> Vec<Rect> {
+    let mut v = Vec::new();
+    for j in 0..3 {
+        for i in 0..3 {
+            let (x, width) = part(w, 3, i);
+            let (y, height) = part(h, 3, j);
+            v.push(Rect {
+                x,
+                y,
+                width,
+                height,
+            });
+        }
+    }
+    v
+}
+
+fn request(w: u32, h: u32) -> RenderRequest {
+    RenderRequest {
+        width: w,
+        height: h,
+        threads: Some(2),
+        ..RenderRequest::default()
+    }
+}
+
+#[test]
+fn regions_equal_the_crop_of_the_whole_render_mono_and_side_by_side() {
+    for name in ["mandelbulb", "menger", "model-tree"] {
+        let scene = presets::load(name).unwrap();
+        let cam = scene.camera.clone();
+        let mut s = Session::new(scene).unwrap();
+        for projection in [
+            Projection::Mono,
+            Projection::SideBySide {
+                eye_separation: 0.08,
+            },
+        ] {
+            let mut req = RenderRequest {
+                projection,
+                supersample: 2,
+                ssao: 1.0,
+                ..request(52, 34)
+            };
+            let whole = s.render(&cam, &req).unwrap().frame;
+            assert!(
+                whole.depth.iter().any(|d| d.is_finite()),
+                "{name}: empty view"
+            );
+            let (w, h) = req.output_size();
+            for r in grid(w, h) {
+                req.region = Some(r);
+                let got = s.render(&cam, &req).unwrap();
+                assert_eq!((got.stats.width, got.stats.height), (r.width, r.height));
+                assert!(
+                    got.frame == whole.crop(r),
+                    "{name} {projection:?}: region {r:?} differs"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn octree_regions_are_crops_too() {
+    let scene = presets::load("menger").unwrap();
+    let cam = scene.camera.clone();
+    let mut s = Session::new(scene).unwrap();
+    let mut req = RenderRequest {
+        backend: Backend::Octree,
+        ..request(40, 30)
+    };
+    let whole = s.render(&cam, &req).unwrap();
+    assert!(whole.stats.octree.unwrap().settle_frames > 0);
+    let r = Rect {
+        x: 7,
+        y: 5,
+        width: 20,
+        height: 11,
+    };
+    req.region = Some(r);
+    let part = s.render(&cam, &req).unwrap();
+    assert!(part.frame == whole.frame.crop(r));
+    // The same explorer served both (settled once).
+    assert_eq!(s.counters().octrees_built, 1);
+    assert_eq!(part.stats.octree.unwrap().settle_frames, 0);
+}
+
+#[test]
+fn parameter_edits_compile_nothing_and_structure_edits_recompile_the_tape() {
+    let scene = fathom_core::scenes::hundred_node_scene();
+    let mut s = Session::new(scene.clone()).unwrap();
+    assert_eq!(s.counters().compiles, 1);
+    // A parameter edit: the first primitive's first parameter.
+    let mut edited = scene.clone();
+    let p = &mut edited.root.children[0].shape.params[0];
+    *p *= 0.9;
+    assert_eq!(s.set_scene(edited.clone()).unwrap(), SceneChange::Params);
+    assert_eq!(s.set_scene(edited.clone()).unwrap(), SceneChange::Unchanged);
+    let mut moved = edited.clone();
+    moved.camera.eye.x += 1.0;
+    assert_eq!(s.set_scene(moved.clone()).unwrap(), SceneChange::Camera);
+    moved.render.ambient = 0.3;
+    assert_eq!(s.set_scene(moved.clone()).unwrap(), SceneChange::Settings);
+    assert_eq!((s.counters().compiles, s.counters().param_updates), (1, 1));
+    // The tape equals a fresh compile of the edited scene.
+    assert_eq!(s.tape(), &fathom_core::Tape::compile(&moved).unwrap());
+    // A structure edit recompiles.
+    let mut grown = moved.clone();
+    grown.root.children.pop();
+    assert_eq!(s.set_scene(grown.clone()).unwrap(), SceneChange::Recompiled);
+    assert_eq!(s.counters().compiles, 2);
+    // A bad edit is refused and the session keeps its scene.
+    let mut bad = grown.clone();
+    bad.root.shape.params[0] = f64::NAN;
+    let e = s.set_scene(bad).unwrap_err();
+    assert!(matches!(e, RenderError::Scene(_)), "{e}");
+    assert!(e.to_string().contains("root.shape"), "{e}");
+    assert_eq!(s.scene(), &grown);
+}
+
+#[test]
+fn on_the_gpu_a_parameter_edit_is_a_buffer_write_and_a_structure_edit_builds_no_pipeline() {
+    let scene = presets::load("model-tree").unwrap();
+    let cam = scene.camera.clone();
+    let gpu = fathom_gpu::Gpu::headless_vulkan().expect("lavapipe (scripts/setup.sh)");
+    let mut s = Session::new(scene.clone()).unwrap();
+    s.set_gpu(fathom_gpu::Renderer::new(gpu).unwrap());
+    let req = RenderRequest {
+        backend: Backend::Gpu,
+        ..request(32, 24)
+    };
+    let first = s.render(&cam, &req).unwrap();
+    assert_eq!(first.stats.renderer, "gpu");
+    let built = s.gpu().unwrap().objects_built();
+    let uploads = s.counters().gpu_uploads;
+    // Parameter edit: no compile, one upload, no new shader module or pipeline.
+    let mut edited = scene.clone();
+    edited.root.shape.params[0] *= 1.1;
+    assert_eq!(s.set_scene(edited.clone()).unwrap(), SceneChange::Params);
+    let after = s.render(&cam, &req).unwrap();
+    assert_eq!(s.counters().compiles, 1);
+    assert_eq!(s.counters().gpu_uploads, uploads + 1);
+    assert_eq!(s.gpu().unwrap().objects_built(), built);
+    assert!(
+        after.frame != first.frame,
+        "the edit did not reach the frame"
+    );
+    // Nothing changed: nothing uploaded.
+    s.render(&cam, &req).unwrap();
+    assert_eq!(s.counters().gpu_uploads, uploads + 1);
+    // Structure edit: a new tape, still no new pipeline.
+    let mut grown = edited.clone();
+    grown.root.children.pop();
+    assert_eq!(s.set_scene(grown).unwrap(), SceneChange::Recompiled);
+    s.render(&cam, &req).unwrap();
+    assert_eq!(s.counters().compiles, 2);
+    assert_eq!(s.gpu().unwrap().objects_built(), built);
+}
+
+#[test]
+fn gpu_regions_are_crops_of_the_whole_frame() {
+    let scene = presets::load("menger").unwrap();
+    let cam = scene.camera.clone();
+    let gpu = fathom_gpu::Gpu::headless_vulkan().expect("lavapipe (scripts/setup.sh)");
+    let mut s = Session::new(scene).unwrap();
+    s.set_gpu(fathom_gpu::Renderer::new(gpu).unwrap());
+    let mut req = RenderRequest {
+        backend: Backend::Gpu,
+        projection: Projection::SideBySide {
+            eye_separation: 0.08,
+        },
+        ssao: 1.0,
+        ..request(24, 16)
+    };
+    let whole = s.render(&cam, &req).unwrap().frame;
+    let (w, h) = req.output_size();
+    for r in grid(w, h) {
+        req.region = Some(r);
+        assert!(
+            s.render(&cam, &req).unwrap().frame == whole.crop(r),
+            "{r:?}"
+        );
+    }
+}
+
+#[test]
+fn a_cancelled_frame_stops_within_the_tiles_in_flight_and_the_next_frame_is_whole() {
+    let scene = presets::load("mandelbulb").unwrap();
+    let cam: Camera = scene.camera.clone();
+    let mut s = Session::new(scene).unwrap();
+    let threads = 2;
+    let req = RenderRequest {
+        threads: Some(threads),
+        ..request(320, 240)
+    };
+    let reference = s.render(&cam, &req).unwrap();
+    let tiles = 320usize.div_ceil(16) * 240usize.div_ceil(16);
+    let token = CancelToken::new();
+    let done = AtomicUsize::new(0);
+    let at_cancel = 5;
+    let progress = |p: Progress| {
+        assert_eq!(p.total, tiles);
+        done.fetch_add(1, Ordering::SeqCst);
+        if p.done == at_cancel {
+            token.cancel();
+        }
+    };
+    let control = Control {
+        cancel: Some(&token),
+        progress: Some(&progress),
+    };
+    let t = std::time::Instant::now();
+    let e = s.render_with(&cam, &req, &control).unwrap_err();
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    assert!(matches!(e, RenderError::Cancelled), "{e}");
+    // After the flag was set no tile started: only those already in flight finished.
+    let finished = done.load(Ordering::SeqCst);
+    assert!(
+        finished <= at_cancel + threads,
+        "{finished} tiles finished after cancelling at {at_cancel} with {threads} threads"
+    );
+    eprintln!(
+        "cancelled after {at_cancel} of {tiles} tiles; {finished} finished; returned after {ms:.1} ms \
+         (a whole frame took {:.1} ms)",
+        reference.stats.ms.total
+    );
+    // The session is usable and the next frame is exactly the uncancelled one.
+    token.reset();
+    let again = s
+        .render_with(
+            &cam,
+            &req,
+            &Control {
+                cancel: Some(&token),
+                progress: None,
+            },
+        )
+        .unwrap();
+    assert!(again.frame == reference.frame);
+}
+
+#[test]
+fn the_gpu_falls_back_to_the_cpu_past_f32_precision_and_says_so() {
+    let scene = presets::load("menger").unwrap();
+    let mut cam = scene.camera.clone();
+    // A view 1e-9 wide, far from the origin: past f32 positions.
+    cam.target = glam::DVec3::new(0.3, 0.2, 1.0);
+    cam.eye = cam.target + glam::DVec3::new(1e-9, 1e-9, 1e-8);
+    cam.fov = 10.0;
+    let gpu = fathom_gpu::Gpu::headless_vulkan().expect("lavapipe (scripts/setup.sh)");
+    let mut s = Session::new(scene).unwrap();
+    s.set_gpu(fathom_gpu::Renderer::new(gpu).unwrap());
+    let req = RenderRequest {
+        backend: Backend::Gpu,
+        ..request(16, 12)
+    };
+    let r = s.render(&cam, &req).unwrap();
+    assert_eq!(r.stats.renderer, "trace");
+    assert!(r.stats.deep_f64_path);
+    assert!(r.stats.note.unwrap().contains("f32 precision"));
+}
