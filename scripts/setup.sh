@@ -10,6 +10,9 @@ have() { dpkg -s "$1" >/dev/null 2>&1; }
 for p in mesa-vulkan-drivers libvulkan1; do
   have "$p" || need+=("$p")
 done
+# Mandelbulber2: its shipped example .fract files are the import tests' input (and
+# scripts/mandelbulber-masks.sh renders the golden silhouettes with it).
+have mandelbulber2 || need+=(mandelbulber2)
 # (window tests add their packages here: xvfb ...)
 
 if [ ${#need[@]} -gt 0 ]; then

@@ -12,6 +12,7 @@ use crate::scene::{SCENE_VERSION, Scene, SceneError};
 use std::path::Path;
 use thiserror::Error;
 
+pub mod fract;
 mod lex;
 
 /// Why a scene file could not be read or written.
@@ -201,8 +202,24 @@ fn describe(code: &ron::Error) -> String {
     }
 }
 
-/// Reads and parses a scene file, refusing oversized files before reading them.
+/// Reads and parses a scene file, refusing oversized files before reading them. A `.fract`
+/// file is read as Mandelbulber2 settings ([`fract`]); what it could not carry over is listed
+/// on standard error as warnings (use [`fract::load`] to get them instead).
 pub fn load(path: &Path) -> Result<Scene, SceneFileError> {
+    if fract::is_fract(path) {
+        let imported = fract::load(path)?;
+        for w in &imported.warnings {
+            eprintln!("fathom: warning: {w}");
+        }
+        return Ok(imported.scene);
+    }
+    let text = read_text(path)?;
+    parse(&text, &path.display().to_string())
+}
+
+/// Reads a text file, refusing oversized files before reading them and reporting where the
+/// text stops being UTF-8.
+fn read_text(path: &Path) -> Result<String, SceneFileError> {
     let origin = path.display().to_string();
     let io = |source| SceneFileError::Io {
         origin: origin.clone(),
@@ -224,7 +241,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneFileError> {
             msg: "the file is not valid UTF-8 text".into(),
         }
     })?;
-    parse(&text, &origin)
+    Ok(text)
 }
 
 /// The scene as scene-file text.

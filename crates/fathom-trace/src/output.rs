@@ -1,5 +1,7 @@
-//! Writing a [`Frame`] to files: the tonemapped PNG, the hit mask, the depth map (EXR) and the
-//! heat map of steps per pixel.
+//! Writing a [`Frame`] to files: the tonemapped PNG (8 or 16 bits), the hit mask, the depth map
+//! (EXR), the layered EXR for compositing (colour, depth, normal, object id, mask), the heat map
+//! of steps per pixel; numbered names for image sequences; and a camera path as a glTF
+//! animation, so other tools can match a render.
 
 use crate::post;
 use fathom_core::frame::Frame;
@@ -94,9 +96,424 @@ pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<()
         .map_err(|e| write_error(path, e))
 }
 
+/// The tonemapped, gamma-encoded colour image as a 16-bit PNG (the same curve as the 8-bit
+/// one, without its banding in dark gradients).
+pub fn save_colour16(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
+    use image::ImageEncoder;
+    let data: Vec<u8> = frame
+        .colour
+        .iter()
+        .flat_map(|c| c.map(|v| (post::srgb(post::tonemap(v)) * 65535.0 + 0.5) as u16))
+        .flat_map(u16::to_be_bytes)
+        .collect();
+    let enc = image::codecs::png::PngEncoder::new(BufWriter::new(file));
+    enc.write_image(
+        &data,
+        frame.width,
+        frame.height,
+        image::ExtendedColorType::Rgb16,
+    )
+    .map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// The channels of the layered EXR, in the OpenEXR layer naming convention: `R G B` linear
+/// colour (not tonemapped), `A` coverage (the mask), `Z` ray distance (misses at `far`),
+/// `normal.X .Y .Z` world normal, `id` material id (u32; `u32::MAX` for misses).
+pub const LAYER_CHANNELS: [&str; 9] = [
+    "R", "G", "B", "A", "Z", "normal.X", "normal.Y", "normal.Z", "id",
+];
+
+/// Every G-buffer layer in one EXR for compositing (see [`LAYER_CHANNELS`]).
+pub fn save_layers(frame: &Frame, far: f32, path: &Path) -> Result<(), String> {
+    use exr::prelude::*;
+    let n = frame.len();
+    let hit = |i: usize| frame.is_hit(i);
+    let f32s = |f: &dyn Fn(usize) -> f32| FlatSamples::F32((0..n).map(f).collect());
+    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
+    for (k, name) in LAYER_CHANNELS.iter().enumerate() {
+        let samples = match k {
+            0..=2 => f32s(&|i| frame.colour[i][k]),
+            3 => f32s(&|i| if hit(i) { 1.0 } else { 0.0 }),
+            4 => f32s(&|i| if hit(i) { frame.depth[i] } else { far }),
+            5..=7 => f32s(&|i| frame.normal[i][k - 5]),
+            _ => FlatSamples::U32(frame.id.clone()),
+        };
+        channels.push(AnyChannel::new(*name, samples));
+    }
+    let size = (frame.width as usize, frame.height as usize);
+    let layer = Layer::new(
+        size,
+        LayerAttributes::named("fathom"),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(channels)),
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// The file name of frame `index` of a sequence: the pattern's one run of `#` is replaced by
+/// the zero-padded number (`shot-####.png` -> `shot-0042.png`); a pattern without `#` gets
+/// `-NNNN` before its extension.
+pub fn sequence_path(pattern: &Path, index: u64) -> Result<std::path::PathBuf, String> {
+    let text = pattern.to_string_lossy();
+    let runs: Vec<(usize, usize)> = {
+        let b = text.as_bytes();
+        let mut runs = Vec::new();
+        let mut i = 0;
+        while i < b.len() {
+            if b[i] == b'#' {
+                let start = i;
+                while i < b.len() && b[i] == b'#' {
+                    i += 1;
+                }
+                runs.push((start, i - start));
+            } else {
+                i += 1;
+            }
+        }
+        runs
+    };
+    match runs[..] {
+        [] => {
+            let stem = pattern.file_stem().unwrap_or_default().to_string_lossy();
+            let name = match pattern.extension() {
+                Some(e) => format!("{stem}-{index:04}.{}", e.to_string_lossy()),
+                None => format!("{stem}-{index:04}"),
+            };
+            Ok(pattern.with_file_name(name))
+        }
+        [(at, width)] => {
+            let num = format!("{index:0width$}");
+            if num.len() > width {
+                return Err(format!(
+                    "frame {index} does not fit the {width} digits of `{text}`; use more `#`"
+                ));
+            }
+            Ok(format!("{}{num}{}", &text[..at], &text[at + width..]).into())
+        }
+        _ => Err(format!(
+            "`{text}` has {} runs of `#`; a sequence pattern has one (e.g. shot-####.png)",
+            runs.len()
+        )),
+    }
+}
+
+/// Writes a camera path as a binary glTF (GLB): one perspective camera whose node is animated
+/// (translation and rotation, linear, one key per frame at `fps`), so Blender and other tools
+/// can match a rendered sequence. glTF cannot animate the field of view without extensions,
+/// so every camera must share the first one's `fov`.
+pub fn save_camera_path(
+    cameras: &[fathom_core::Camera],
+    fps: f64,
+    aspect: f64,
+    path: &Path,
+) -> Result<(), String> {
+    use gltf_json as json;
+    use json::validation::Checked::Valid;
+    use json::validation::USize64;
+    if cameras.is_empty() {
+        return Err("a camera path needs at least one camera".into());
+    }
+    if !(fps.is_finite() && fps > 0.0 && fps <= 1000.0) {
+        return Err(format!("frame rate {fps} is out of range (0, 1000]"));
+    }
+    if !(aspect.is_finite() && aspect > 0.0) {
+        return Err(format!("aspect ratio {aspect} must be positive"));
+    }
+    let fov = cameras[0].fov;
+    for (i, c) in cameras.iter().enumerate() {
+        c.validate().map_err(|e| format!("camera {i}: {e}"))?;
+        if c.fov != fov {
+            return Err(format!(
+                "camera {i}: fov {} differs from the first camera's {fov}; glTF cannot animate \
+                 the field of view",
+                c.fov
+            ));
+        }
+    }
+    let mut bin: Vec<u8> = Vec::new();
+    let mut put = |v: &[f32]| {
+        let at = bin.len();
+        for x in v {
+            bin.extend_from_slice(&x.to_le_bytes());
+        }
+        (at, bin.len() - at)
+    };
+    let times: Vec<f32> = (0..cameras.len())
+        .map(|i| (i as f64 / fps) as f32)
+        .collect();
+    let mut trans = Vec::new();
+    let mut rots = Vec::new();
+    for c in cameras {
+        let f = c.frame();
+        // glTF cameras look down -Z with +Y up.
+        let m = glam::DMat3::from_cols(f.right, f.up, -f.forward);
+        let q = glam::DQuat::from_mat3(&m).normalize();
+        trans.extend([f.eye.x as f32, f.eye.y as f32, f.eye.z as f32]);
+        rots.extend([q.x as f32, q.y as f32, q.z as f32, q.w as f32]);
+    }
+    let spans = [put(&times), put(&trans), put(&rots)];
+    let mut root = json::Root::default();
+    let buffer = root.push(json::Buffer {
+        byte_length: USize64(bin.len() as u64),
+        extensions: Default::default(),
+        extras: Default::default(),
+        name: None,
+        uri: None,
+    });
+    use json::accessor::{ComponentType, GenericComponentType, Type};
+    let mut accessors = Vec::new();
+    for (k, (at, len)) in spans.into_iter().enumerate() {
+        let view = root.push(json::buffer::View {
+            buffer,
+            byte_length: USize64(len as u64),
+            byte_offset: Some(USize64(at as u64)),
+            byte_stride: None,
+            extensions: Default::default(),
+            extras: Default::default(),
+            name: None,
+            target: None,
+        });
+        let (ty, bounds) = match k {
+            0 => (
+                Type::Scalar,
+                Some((vec![0.0f32], vec![*times.last().expect("non-empty")])),
+            ),
+            1 => (Type::Vec3, None),
+            _ => (Type::Vec4, None),
+        };
+        accessors.push(root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: Some(USize64(0)),
+            count: USize64(cameras.len() as u64),
+            component_type: Valid(GenericComponentType(ComponentType::F32)),
+            extensions: Default::default(),
+            extras: Default::default(),
+            type_: Valid(ty),
+            min: bounds.as_ref().map(|b| json::Value::from(b.0.clone())),
+            max: bounds.as_ref().map(|b| json::Value::from(b.1.clone())),
+            name: None,
+            normalized: false,
+            sparse: None,
+        }));
+    }
+    let camera = root.push(json::Camera {
+        name: Some("fathom".into()),
+        orthographic: None,
+        perspective: Some(json::camera::Perspective {
+            aspect_ratio: Some(aspect as f32),
+            yfov: fov.to_radians() as f32,
+            zfar: None,
+            znear: 0.001,
+            extensions: Default::default(),
+            extras: Default::default(),
+        }),
+        type_: Valid(json::camera::Type::Perspective),
+        extensions: Default::default(),
+        extras: Default::default(),
+    });
+    let node = root.push(json::Node {
+        camera: Some(camera),
+        name: Some("fathom camera".into()),
+        translation: Some([trans[0], trans[1], trans[2]]),
+        rotation: Some(json::scene::UnitQuaternion([
+            rots[0], rots[1], rots[2], rots[3],
+        ])),
+        ..Default::default()
+    });
+    let sampler = |output| json::animation::Sampler {
+        extensions: Default::default(),
+        extras: Default::default(),
+        input: accessors[0],
+        interpolation: Valid(json::animation::Interpolation::Linear),
+        output,
+    };
+    let samplers = vec![sampler(accessors[1]), sampler(accessors[2])];
+    let channel = |s: u32, path| json::animation::Channel {
+        sampler: json::Index::new(s),
+        target: json::animation::Target {
+            extensions: Default::default(),
+            extras: Default::default(),
+            node,
+            path: Valid(path),
+        },
+        extensions: Default::default(),
+        extras: Default::default(),
+    };
+    root.push(json::Animation {
+        extensions: Default::default(),
+        extras: Default::default(),
+        channels: vec![
+            channel(0, json::animation::Property::Translation),
+            channel(1, json::animation::Property::Rotation),
+        ],
+        name: Some("camera path".into()),
+        samplers,
+    });
+    let scene = root.push(json::Scene {
+        extensions: Default::default(),
+        extras: Default::default(),
+        name: None,
+        nodes: vec![node],
+    });
+    root.scene = Some(scene);
+    let mut text = json::serialize::to_string(&root).map_err(|e| e.to_string())?;
+    while text.len() % 4 != 0 {
+        text.push(' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + text.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(text.as_bytes());
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    std::fs::write(path, out).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn tmp(tag: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("fathom-out-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn two_pixels() -> Frame {
+        let mut f = Frame::new(2, 1);
+        f.colour[0] = [0.25, 0.5, 2.0];
+        f.depth[0] = 3.5;
+        f.normal[0] = [0.0, 1.0, 0.0];
+        f.id[0] = 7;
+        f
+    }
+
+    #[test]
+    fn layered_exr_holds_every_layer() {
+        use exr::prelude::*;
+        let dir = tmp("layers");
+        let path = dir.join("l.exr");
+        save_layers(&two_pixels(), 20.0, &path).unwrap();
+        let img = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .all_layers()
+            .all_attributes()
+            .from_file(&path)
+            .unwrap();
+        let layer = &img.layer_data[0];
+        let get = |name: &str| {
+            let c = layer
+                .channel_data
+                .list
+                .iter()
+                .find(|c| c.name == *name)
+                .unwrap();
+            c.sample_data.values_as_f32().collect::<Vec<f32>>()
+        };
+        assert_eq!(get("R"), [0.25, 0.0]);
+        assert_eq!(get("B"), [2.0, 0.0], "colour is linear, not tonemapped");
+        assert_eq!(get("A"), [1.0, 0.0]);
+        assert_eq!(get("Z"), [3.5, 20.0]);
+        assert_eq!(get("normal.Y"), [1.0, 0.0]);
+        let id = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name == *"id")
+            .unwrap();
+        assert!(matches!(&id.sample_data, FlatSamples::U32(v) if v[..] == [7, u32::MAX]));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn png16_keeps_sixteen_bits() {
+        let dir = tmp("png16");
+        let path = dir.join("c.png");
+        save_colour16(&two_pixels(), open_output(&path).unwrap(), &path).unwrap();
+        let img = image::open(&path).unwrap();
+        assert_eq!(img.color(), image::ColorType::Rgb16);
+        let px = img.to_rgb16().get_pixel(0, 0).0;
+        let want = (post::srgb(post::tonemap(0.25)) * 65535.0 + 0.5) as u16;
+        assert_eq!(px[0], want);
+        assert_ne!(px[0] % 257, 0, "a value 8 bits could not hold");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn sequence_names_follow_the_pattern_or_explain() {
+        let p = |s: &str, i| sequence_path(Path::new(s), i);
+        assert_eq!(
+            p("out/shot-####.png", 42).unwrap(),
+            Path::new("out/shot-0042.png")
+        );
+        assert_eq!(p("f.png", 7).unwrap(), Path::new("f-0007.png"));
+        assert!(p("a-##.png", 100).unwrap_err().contains("2 digits"));
+        assert!(p("a-#-#.png", 1).unwrap_err().contains("runs"));
+    }
+
+    #[test]
+    fn camera_path_reads_back_with_gltf() {
+        use fathom_core::Camera;
+        let dir = tmp("campath");
+        let path = dir.join("c.glb");
+        let cams: Vec<Camera> = (0..5)
+            .map(|i| Camera {
+                eye: glam::DVec3::new(i as f64, 1.0, 4.0),
+                ..Camera::default()
+            })
+            .collect();
+        save_camera_path(&cams, 24.0, 16.0 / 9.0, &path).unwrap();
+        let (doc, buffers, _) = gltf::import(&path).unwrap();
+        let anim = doc.animations().next().unwrap();
+        let mut saw = 0;
+        for ch in anim.channels() {
+            let r = ch.reader(|b| Some(&buffers[b.index()]));
+            let times: Vec<f32> = r.read_inputs().unwrap().collect();
+            assert_eq!(times.len(), 5);
+            assert!((times[4] - 4.0 / 24.0).abs() < 1e-6);
+            if let Some(gltf::animation::util::ReadOutputs::Translations(t)) = r.read_outputs() {
+                let t: Vec<[f32; 3]> = t.collect();
+                assert_eq!(t[3], [3.0, 1.0, 4.0]);
+                saw += 1;
+            }
+            if let Some(gltf::animation::util::ReadOutputs::Rotations(q)) = r.read_outputs() {
+                // The default camera looks from +z towards the origin: a glTF camera's -Z
+                // forward turned down a little about x.
+                let q: Vec<[f32; 4]> = q.into_f32().collect();
+                let q = glam::Quat::from_array(q[0]);
+                let fwd = q * glam::Vec3::NEG_Z;
+                let want = (glam::Vec3::ZERO - glam::Vec3::new(0.0, 1.0, 4.0)).normalize();
+                assert!((fwd - want).length() < 1e-5, "{fwd}");
+                saw += 1;
+            }
+        }
+        assert_eq!(saw, 2);
+        let cam = doc.cameras().next().unwrap();
+        assert!(
+            matches!(cam.projection(), gltf::camera::Projection::Perspective(p) if (p.yfov() - 45f32.to_radians()).abs() < 1e-6)
+        );
+        let mut zoom = cams.clone();
+        zoom[2].fov = 30.0;
+        assert!(
+            save_camera_path(&zoom, 24.0, 1.0, &path)
+                .unwrap_err()
+                .contains("fov")
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn depth_exr_keeps_hits_and_marks_misses_in_alpha() {

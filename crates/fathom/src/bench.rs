@@ -17,6 +17,9 @@ enum BenchKind {
     Gpu(crate::bench_gpu::GpuArgs),
     /// Microgeometry demos on the CPU and GPU renderers, and baked-grid error and memory.
     Micro(crate::bench_micro::MicroBenchArgs),
+    /// Streaming mesher: triangles/s, peak RSS and surface error for Menger and Mandelbulb,
+    /// sphere Hausdorff, and Mandelbulber2's mesh export where installed.
+    Mesh(crate::bench_mesh::MeshBenchArgs),
     /// The sparse voxel octree explorer's evaluation: writes a markdown report with plots.
     Svo(crate::bench_svo::SvoArgs),
     /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
@@ -32,6 +35,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
         BenchKind::Gpu(g) => crate::bench_gpu::run(g),
         BenchKind::Micro(m) => crate::bench_micro::run(m),
+        BenchKind::Mesh(m) => crate::bench_mesh::run(m),
         BenchKind::Svo(s) => crate::bench_svo::run(s),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
         BenchKind::Volume(v) => crate::bench_volume::run(v),

@@ -11,11 +11,14 @@ mod args;
 mod bench;
 mod bench_eval;
 mod bench_gpu;
+mod bench_mesh;
 mod bench_micro;
 mod bench_svo;
 mod bench_trace;
 mod bench_volume;
+mod cmd_import;
 mod cmd_list;
+mod cmd_mesh;
 mod cmd_micro;
 mod cmd_render;
 mod cmd_scene;
@@ -49,6 +52,8 @@ enum Command {
     Scene(cmd_scene::SceneArgs),
     Zoom(cmd_zoom::ZoomArgs),
     Micro(Box<cmd_micro::MicroArgs>),
+    Mesh(Box<cmd_mesh::MeshArgs>),
+    Import(cmd_import::ImportArgs),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
     Volume(Box<cmd_volume::VolumeArgs>),
@@ -74,6 +79,8 @@ fn main() -> ExitCode {
         Some(Command::Scene(a)) => cmd_scene::run(a),
         Some(Command::Zoom(a)) => cmd_zoom::run(a),
         Some(Command::Micro(a)) => cmd_micro::run(*a),
+        Some(Command::Mesh(a)) => cmd_mesh::run(*a),
+        Some(Command::Import(a)) => cmd_import::run(a),
         Some(Command::Bench(a)) => bench::run(a),
         Some(Command::Volume(a)) => cmd_volume::run(*a),
     };
@@ -95,7 +102,9 @@ mod tests {
     fn every_command_help_teaches_by_example() {
         let mut cli = Cli::command();
         cli.build();
-        for name in ["render", "zoom", "list", "scene", "volume", "micro"] {
+        for name in [
+            "render", "zoom", "list", "scene", "volume", "micro", "mesh", "import",
+        ] {
             let sub = cli.find_subcommand_mut(name).unwrap();
             let help = sub.render_long_help().to_string();
             let example = format!("\n  fathom {name} ");

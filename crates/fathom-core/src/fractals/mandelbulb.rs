@@ -16,10 +16,10 @@ use crate::vec3::V3;
 
 /// One trig-form iteration: returns the new point (before the masked update) and `r^(power-1)`.
 #[inline(always)]
-fn step_trig<S: Real>(z: V3<S>, r: S, power: S, c: V3<S>) -> (V3<S>, S) {
+fn step_trig<S: Real>(z: V3<S>, r: S, power: S, c: V3<S>, offsets: (S, S)) -> (V3<S>, S) {
     let safe_r = r.max(S::splat(1e-30));
-    let theta = (z.z / safe_r).clamp(-S::one(), S::one()).acos() * power;
-    let phi = z.y.atan2(z.x) * power;
+    let theta = ((z.z / safe_r).clamp(-S::one(), S::one()).acos() + offsets.1) * power;
+    let phi = (z.y.atan2(z.x) + offsets.0) * power;
     let rp1 = safe_r.powf(power - S::one());
     let zr = rp1 * safe_r;
     let (st, ct) = theta.sin_cos();
@@ -62,14 +62,24 @@ fn step_pow8<S: Real>(z: V3<S>, r: S, c: V3<S>) -> (V3<S>, S) {
 /// Mandelbulb estimate, written with masks so the packet path iterates every lane until all
 /// have escaped while leaving escaped lanes untouched. Returns (distance, orbit trap).
 #[inline(always)]
-pub(super) fn mandelbulb<S: Real>(c: V3<S>, power: S, iterations: usize, bailout: S) -> (S, S) {
-    if power.lane(0) == 8.0 {
+pub(super) fn mandelbulb<S: Real>(
+    c: V3<S>,
+    power: S,
+    iterations: usize,
+    bailout: S,
+    azimuth_offset: S,
+    polar_offset: S,
+) -> (S, S) {
+    let no_offsets = azimuth_offset.lane(0) == 0.0 && polar_offset.lane(0) == 0.0;
+    if power.lane(0) == 8.0 && no_offsets {
         iterate(c, iterations, bailout, S::splat(8.0), |z, r| {
             step_pow8(z, r, c)
         })
     } else {
+        let deg = S::splat(std::f64::consts::PI / 180.0);
+        let offsets = (azimuth_offset * deg, polar_offset * deg);
         iterate(c, iterations, bailout, power, |z, r| {
-            step_trig(z, r, power, c)
+            step_trig(z, r, power, c, offsets)
         })
     }
 }
@@ -109,11 +119,13 @@ fn iterate<S: Real>(
 #[cfg(test)]
 pub(super) fn steps_for_test(z: V3<f64>, c: V3<f64>) -> (V3<f64>, V3<f64>) {
     let r = z.length();
-    (step_trig(z, r, 8.0, c).0, step_pow8(z, r, c).0)
+    (step_trig(z, r, 8.0, c, (0.0, 0.0)).0, step_pow8(z, r, c).0)
 }
 
 /// The trig form forced at power 8, to compare whole estimates with the fast path.
 #[cfg(test)]
 pub(super) fn mandelbulb_trig_for_test(c: V3<f64>, iterations: usize, bailout: f64) -> (f64, f64) {
-    iterate(c, iterations, bailout, 8.0, |z, r| step_trig(z, r, 8.0, c))
+    iterate(c, iterations, bailout, 8.0, |z, r| {
+        step_trig(z, r, 8.0, c, (0.0, 0.0))
+    })
 }

@@ -41,7 +41,7 @@ fn dispatch_cases_follow_the_registry_tables() {
 
 #[test]
 fn parameter_layout_follows_the_declaration() {
-    // Torus: two scalars; Box: one Vec3; Mandelbulb: Scalar, Int, Scalar, Scalar; Rotate:
+    // Torus: two scalars; Box: one Vec3; Mandelbulb: Scalar, Int, Scalar, Scalar, Scalar, Scalar; Rotate:
     // baked.
     let d = dispatch();
     assert!(
@@ -50,7 +50,7 @@ fn parameter_layout_follows_the_declaration() {
     );
     assert!(d.contains("prim_Box(p, param_vec3(a + 0u))"));
     assert!(d.contains(
-        "frac_Mandelbulb(p, params[a + 0u], u32(params[a + 1u]), params[a + 2u], params[a + 3u])"
+        "frac_Mandelbulb(p, params[a + 0u], u32(params[a + 1u]), params[a + 2u], params[a + 3u], params[a + 4u], params[a + 5u])"
     ));
     assert!(d.contains("xf_Rotate(p, k, a)"));
 }

@@ -6,10 +6,10 @@
 // --- Mandelbulb (fractals/mandelbulb.rs) ---
 
 // The spherical power map by acos/atan2, any power. Returns (z', r^(power-1)).
-fn bulb_step_trig(z: vec3f, r: f32, power: f32, c: vec3f) -> vec4f {
+fn bulb_step_trig(z: vec3f, r: f32, power: f32, c: vec3f, offsets: vec2f) -> vec4f {
     let safe_r = max(r, 1e-30);
-    let theta = acos_p(clamp(z.z / safe_r, -1.0, 1.0)) * power;
-    let phi = atan2_p(z.y, z.x) * power;
+    let theta = (acos_p(clamp(z.z / safe_r, -1.0, 1.0)) + offsets.y) * power;
+    let phi = (atan2_p(z.y, z.x) + offsets.x) * power;
     let rp1 = pow(safe_r, power - 1.0);
     let zr = rp1 * safe_r;
     let t = sincos_p(theta);
@@ -34,7 +34,10 @@ fn bulb_step_pow8(z: vec3f, r: f32, c: vec3f) -> vec4f {
     return vec4f(vec3f(av.y * uv.x, av.y * uv.y, av.x) + c, r7);
 }
 
-fn frac_Mandelbulb(c: vec3f, power: f32, iterations: u32, bailout: f32, safety: f32) -> vec2f {
+fn frac_Mandelbulb(c: vec3f, power: f32, iterations: u32, bailout: f32, safety: f32, azimuth_offset: f32, polar_offset: f32) -> vec2f {
+    // Mandelbulber's angle offsets, degrees; at zero the trig-free power-8 step applies.
+    let offsets = vec2f(azimuth_offset, polar_offset) * 0.017453292519943295;
+    let fast8 = power == 8.0 && azimuth_offset == 0.0 && polar_offset == 0.0;
     var z = c;
     var dr = 1.0;
     var r = length(z);
@@ -45,10 +48,10 @@ fn frac_Mandelbulb(c: vec3f, power: f32, iterations: u32, bailout: f32, safety: 
             break;
         }
         var s: vec4f;
-        if power == 8.0 {
+        if fast8 {
             s = bulb_step_pow8(z, r, c);
         } else {
-            s = bulb_step_trig(z, r, power, c);
+            s = bulb_step_trig(z, r, power, c, offsets);
         }
         dr = s.w * power * dr + 1.0;
         z = s.xyz;
