@@ -2,7 +2,9 @@
 //!
 //! Each subcommand lives in its own module; this file only parses the command line and
 //! dispatches. The modules are thin: they turn flags into a `fathom_render::RenderRequest` (or
-//! a zoom), call the render layer's session, and write files. Run with no arguments it renders the default preset and says where it went.
+//! a zoom), call the render layer's session, and write files.
+//! Run with no arguments it opens the explorer window when a display is present, and otherwise
+//! renders the default preset and says where it went.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -13,6 +15,7 @@ mod bench_eval;
 mod bench_gpu;
 mod bench_svo;
 mod bench_trace;
+mod cmd_explore;
 mod cmd_list;
 mod cmd_render;
 mod cmd_scene;
@@ -22,7 +25,9 @@ mod cmd_zoom;
 /// iterated function systems, rendered by sphere tracing.
 ///
 /// Examples:
-///   fathom                                   render the default preset to fathom.png
+///   fathom                                   open the explorer window (with a display), or
+///                                            render the default preset to fathom.png
+///   fathom explore --preset menger           fly through a preset and edit it live
 ///   fathom render --preset menger -o m.png   render a preset
 ///   fathom list primitives                   what a scene can be made of
 ///   fathom scene --preset mandelbulb > my.ron   start a scene file from a preset
@@ -44,6 +49,7 @@ enum Command {
     /// Print a preset (or a scene file, normalised) as scene-file text.
     Scene(cmd_scene::SceneArgs),
     Zoom(cmd_zoom::ZoomArgs),
+    Explore(cmd_explore::ExploreArgs),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
 }
@@ -62,11 +68,13 @@ pub fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        None if fathom_app::display_available() => cmd_explore::run(crate::clap_defaults()),
         None => cmd_render::run_default(),
         Some(Command::Render(a)) => cmd_render::run(*a),
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
         Some(Command::Zoom(a)) => cmd_zoom::run(a),
+        Some(Command::Explore(a)) => cmd_explore::run(a),
         Some(Command::Bench(a)) => bench::run(a),
     };
     match result {
@@ -87,7 +95,7 @@ mod tests {
     fn every_command_help_teaches_by_example() {
         let mut cli = Cli::command();
         cli.build();
-        for name in ["render", "zoom", "list", "scene"] {
+        for name in ["render", "zoom", "explore", "list", "scene"] {
             let sub = cli.find_subcommand_mut(name).unwrap();
             let help = sub.render_long_help().to_string();
             let example = format!("\n  fathom {name} ");
