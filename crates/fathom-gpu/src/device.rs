@@ -15,9 +15,31 @@ pub struct Gpu {
     /// Limits of the device we were given.
     pub limits: wgpu::Limits,
     /// Set by the device-lost callback; checked after every wait.
-    lost: Arc<Mutex<Option<String>>>,
+    lost: Slot,
     /// The first error wgpu reported outside an error scope; checked after every wait.
-    uncaptured: Arc<Mutex<Option<String>>>,
+    uncaptured: Slot,
+}
+
+type Slot = Arc<Mutex<Option<String>>>;
+
+/// Records a lost device and the first uncaptured error instead of panicking.
+fn install_handlers(device: &wgpu::Device) -> (Slot, Slot) {
+    let lost = Arc::new(Mutex::new(None));
+    let l = lost.clone();
+    device.set_device_lost_callback(move |reason, msg| {
+        if let Ok(mut g) = l.lock() {
+            *g = Some(format!("{reason:?}: {msg}"));
+        }
+    });
+    let uncaptured = Arc::new(Mutex::new(None));
+    let u = uncaptured.clone();
+    device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+        eprintln!("fathom: GPU error: {e}");
+        if let Ok(mut g) = u.lock() {
+            g.get_or_insert_with(|| e.to_string());
+        }
+    }));
+    (lost, uncaptured)
 }
 
 /// The backends to try: `WGPU_BACKEND` when set, otherwise wgpu's defaults (Vulkan, Metal,
@@ -96,21 +118,7 @@ impl Gpu {
             adapter: info.name.clone(),
             message: e.to_string(),
         })?;
-        let lost = Arc::new(Mutex::new(None));
-        let l = lost.clone();
-        device.set_device_lost_callback(move |reason, msg| {
-            if let Ok(mut g) = l.lock() {
-                *g = Some(format!("{reason:?}: {msg}"));
-            }
-        });
-        let uncaptured = Arc::new(Mutex::new(None));
-        let u = uncaptured.clone();
-        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            eprintln!("fathom: GPU error: {e}");
-            if let Ok(mut g) = u.lock() {
-                g.get_or_insert_with(|| e.to_string());
-            }
-        }));
+        let (lost, uncaptured) = install_handlers(&device);
         Ok(Gpu {
             device,
             queue,
@@ -119,6 +127,21 @@ impl Gpu {
             lost,
             uncaptured,
         })
+    }
+
+    /// A `Gpu` on a device someone else created (a window's, so the renderer's images can be
+    /// shown without leaving the device). Installs the same lost-device and error handlers.
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo) -> Gpu {
+        let limits = device.limits();
+        let (lost, uncaptured) = install_handlers(&device);
+        Gpu {
+            device,
+            queue,
+            info,
+            limits,
+            lost,
+            uncaptured,
+        }
     }
 
     /// "name (backend, device type)", for reports and benchmarks.

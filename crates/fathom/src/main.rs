@@ -2,7 +2,9 @@
 //!
 //! Each subcommand lives in its own module; this file only parses the command line and
 //! dispatches. The modules are thin: they turn flags into a `fathom_render::RenderRequest` (or
-//! a zoom), call the render layer's session, and write files. Run with no arguments it renders the default preset and says where it went.
+//! a zoom), call the render layer's session, and write files.
+//! Run with no arguments it opens the explorer window when a display is present, and otherwise
+//! renders the default preset and says where it went.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -16,6 +18,7 @@ mod bench_micro;
 mod bench_svo;
 mod bench_trace;
 mod bench_volume;
+mod cmd_explore;
 mod cmd_import;
 mod cmd_list;
 mod cmd_mesh;
@@ -29,7 +32,9 @@ mod cmd_zoom;
 /// iterated function systems, rendered by sphere tracing.
 ///
 /// Examples:
-///   fathom                                   render the default preset to fathom.png
+///   fathom                                   open the explorer window (with a display), or
+///                                            render the default preset to fathom.png
+///   fathom explore --preset menger           fly through a preset and edit it live
 ///   fathom render --preset menger -o m.png   render a preset
 ///   fathom list primitives                   what a scene can be made of
 ///   fathom scene --preset mandelbulb > my.ron   start a scene file from a preset
@@ -54,6 +59,7 @@ enum Command {
     Micro(Box<cmd_micro::MicroArgs>),
     Mesh(Box<cmd_mesh::MeshArgs>),
     Import(cmd_import::ImportArgs),
+    Explore(cmd_explore::ExploreArgs),
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
     Volume(Box<cmd_volume::VolumeArgs>),
@@ -73,6 +79,7 @@ pub fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        None if fathom_app::display_available() => cmd_explore::run(crate::clap_defaults()),
         None => cmd_render::run_default(),
         Some(Command::Render(a)) => cmd_render::run(*a),
         Some(Command::List(a)) => cmd_list::run(a),
@@ -81,6 +88,7 @@ fn main() -> ExitCode {
         Some(Command::Micro(a)) => cmd_micro::run(*a),
         Some(Command::Mesh(a)) => cmd_mesh::run(*a),
         Some(Command::Import(a)) => cmd_import::run(a),
+        Some(Command::Explore(a)) => cmd_explore::run(a),
         Some(Command::Bench(a)) => bench::run(a),
         Some(Command::Volume(a)) => cmd_volume::run(*a),
     };
@@ -103,7 +111,7 @@ mod tests {
         let mut cli = Cli::command();
         cli.build();
         for name in [
-            "render", "zoom", "list", "scene", "volume", "micro", "mesh", "import",
+            "render", "zoom", "explore", "list", "scene", "volume", "micro", "mesh", "import",
         ] {
             let sub = cli.find_subcommand_mut(name).unwrap();
             let help = sub.render_long_help().to_string();

@@ -1,0 +1,1128 @@
+//! The explorer window: the document (scene, file, undo history), the camera, the render
+//! worker and the viewport's frame scheduling, and the panels. The window owns no renderer
+//! state: it sends edits and frame jobs to the worker (which owns the render session) and shows
+//! what comes back, so the UI never waits on a render.
+//!
+//! Layout: a menu bar; on the left the scene (preset picker, the tree, the root's IFS loop,
+//! lights and render settings); on the right the selected node's inspector and the renderer's
+//! settings; at the bottom a status bar (left free above it for a timeline and a bindings panel);
+//! in the middle the viewport with its stats overlay.
+
+use crate::camera::{self, CameraController, Mode};
+use crate::files::{BrowseFor, FileBrowser, Watch};
+use crate::history::History;
+use crate::script::{FrameLog, Script};
+use crate::shot::Shot;
+use crate::tree::{self, NodePath, TreeAction};
+use crate::viewport::{Viewport, view_key};
+use crate::worker::{Reply, Stage, Worker};
+use crate::{input, look};
+use fathom_core::presets::{self, PRESETS};
+use fathom_core::{Projection, Scene, Tape, scene_file};
+use fathom_render::{Backend, RenderRequest, TracerRule};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// How the window was asked to start.
+#[derive(Clone, Debug)]
+pub struct ExploreOptions {
+    pub scene: Scene,
+    /// The scene file it came from (watched for changes), if any.
+    pub path: Option<PathBuf>,
+    /// A name for the title bar (the preset or file name).
+    pub name: String,
+    /// The renderer to start with (default: the GPU on a real GPU, else the CPU tracer).
+    pub backend: Option<Backend>,
+    /// Frame time to hold while moving, ms.
+    pub target_ms: f64,
+    /// Run this many frames, then exit (scripted runs and tests).
+    pub frames: Option<u64>,
+    /// After the last scripted frame, render the view offline to this PNG.
+    pub screenshot: Option<PathBuf>,
+    /// Write one JSON line per frame here.
+    pub log: Option<PathBuf>,
+    /// Where the window leaves why a scripted run failed, for the exit code.
+    pub exit_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+}
+
+impl ExploreOptions {
+    /// Options for `scene` with every default.
+    pub fn new(scene: Scene, name: impl Into<String>) -> ExploreOptions {
+        ExploreOptions {
+            scene,
+            path: None,
+            name: name.into(),
+            backend: None,
+            target_ms: 33.0,
+            frames: None,
+            screenshot: None,
+            log: None,
+            exit_error: Default::default(),
+        }
+    }
+}
+
+/// The stereo layout shown in the viewport.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stereo {
+    Mono,
+    SideBySide,
+    Ods,
+}
+
+/// The renderer's settings in the window.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewSettings {
+    pub backend: Backend,
+    pub tracer: TracerRule,
+    pub prepass: bool,
+    pub ssao: f32,
+    pub stereo: Stereo,
+    pub eye_separation: f64,
+    pub fidelity: f64,
+}
+
+impl ViewSettings {
+    /// The request the viewport's frames start from (their size is chosen per frame).
+    pub fn base_request(&self) -> RenderRequest {
+        let mut r = RenderRequest {
+            backend: self.backend,
+            tracer: self.tracer,
+            prepass: self.prepass,
+            ssao: self.ssao,
+            projection: match self.stereo {
+                Stereo::Mono => Projection::Mono,
+                Stereo::SideBySide => Projection::SideBySide {
+                    eye_separation: self.eye_separation,
+                },
+                Stereo::Ods => Projection::Ods {
+                    eye_separation: self.eye_separation,
+                },
+            },
+            ..RenderRequest::default()
+        };
+        r.octree.fidelity = self.fidelity;
+        r
+    }
+}
+
+/// A message in the status bar.
+struct Note {
+    text: String,
+    error: bool,
+    at: Instant,
+}
+
+/// The screenshot dialog's fields.
+struct ShotDialog {
+    open: bool,
+    width: u32,
+    height: u32,
+    supersample: u32,
+    stereo: Stereo,
+    path: String,
+}
+
+/// The explorer window's state.
+pub struct ExplorerApp {
+    pub scene: Scene,
+    /// Bumps with every edit of the scene.
+    pub generation: u64,
+    name: String,
+    path: Option<PathBuf>,
+    watch: Option<Watch>,
+    /// The camera of the file as last read, to tell whether a reload moved it.
+    file_camera: Option<fathom_core::Camera>,
+    /// The window's own tape (distance at the eye, picking).
+    tape: Tape,
+    history: History,
+    /// The widget of the last edit, so a drag is one undo step.
+    gesture: Option<egui::Id>,
+    edit_label: String,
+    pub camera: CameraController,
+    pub settings: ViewSettings,
+    pub viewport: Viewport,
+    worker: Worker,
+    pub selected: NodePath,
+    notes: Vec<Note>,
+    browser: FileBrowser,
+    bookmarks: Vec<(String, CameraController)>,
+    shot_dialog: ShotDialog,
+    shots: Vec<Shot>,
+    script: Script,
+    /// Window frames so far.
+    pub frames: u64,
+    last_frame: Instant,
+    ui_ms: f64,
+    /// The edit whose first frame is awaited, and when it was made; the last measured latency.
+    pending_edit: Option<(u64, Instant)>,
+    pub edit_latency_ms: Option<f64>,
+    /// Recompilations the worker had done when the last frame came back.
+    pub compiles: u64,
+    viewport_px: (u32, u32),
+    show_help: bool,
+    tree_actions: Vec<TreeAction>,
+    exit_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+}
+
+impl ExplorerApp {
+    /// A window for `opts` (the GPU of `cc`, when it has one, renders when it is a real GPU).
+    pub fn new(
+        cc: &eframe::CreationContext<'_>,
+        opts: ExploreOptions,
+    ) -> Result<ExplorerApp, String> {
+        let ctx = cc.egui_ctx.clone();
+        let tape = Tape::compile(&opts.scene).map_err(|e| e.to_string())?;
+        let worker = Worker::start(opts.scene.clone(), move || ctx.request_repaint())
+            .map_err(|e| e.to_string())?;
+        let mut backend = opts.backend.unwrap_or(Backend::Trace);
+        let mut notes = Vec::new();
+        if let Some(rs) = &cc.wgpu_render_state {
+            let info = rs.adapter.get_info();
+            let software = info.device_type == wgpu::DeviceType::Cpu;
+            if opts.backend.is_none() && !software {
+                backend = Backend::Gpu;
+            }
+            if backend == Backend::Gpu {
+                let gpu = fathom_gpu::Gpu::from_device(rs.device.clone(), rs.queue.clone(), info);
+                match fathom_gpu::Renderer::new(gpu) {
+                    Ok(r) => worker.set_gpu(r),
+                    Err(e) => {
+                        backend = Backend::Trace;
+                        notes.push(Note {
+                            text: format!(
+                                "the GPU renderer could not start ({e}); using the CPU tracer"
+                            ),
+                            error: true,
+                            at: Instant::now(),
+                        });
+                    }
+                }
+            }
+        }
+        let script = Script::new(opts.frames, opts.screenshot.clone(), opts.log.as_deref())?;
+        let camera = CameraController::new(&opts.scene.camera);
+        let watch = opts.path.clone().map(Watch::new);
+        Ok(ExplorerApp {
+            file_camera: opts.path.as_ref().map(|_| opts.scene.camera.clone()),
+            scene: opts.scene,
+            generation: 0,
+            name: opts.name,
+            path: opts.path,
+            watch,
+            tape,
+            history: History::default(),
+            gesture: None,
+            edit_label: String::new(),
+            camera,
+            settings: ViewSettings {
+                backend,
+                tracer: TracerRule::Enhanced,
+                prepass: true,
+                ssao: 0.0,
+                stereo: Stereo::Mono,
+                eye_separation: 0.065,
+                fidelity: 1.0,
+            },
+            viewport: Viewport::new(opts.target_ms),
+            worker,
+            selected: Vec::new(),
+            notes,
+            browser: FileBrowser::default(),
+            bookmarks: Vec::new(),
+            shot_dialog: ShotDialog {
+                open: false,
+                width: 1920,
+                height: 1080,
+                supersample: 2,
+                stereo: Stereo::Mono,
+                path: "fathom-shot.png".into(),
+            },
+            shots: Vec::new(),
+            script,
+            frames: 0,
+            last_frame: Instant::now(),
+            ui_ms: 0.0,
+            pending_edit: None,
+            edit_latency_ms: None,
+            compiles: 1,
+            viewport_px: (0, 0),
+            show_help: false,
+            tree_actions: Vec::new(),
+            exit_error: opts.exit_error,
+        })
+    }
+
+    fn note(&mut self, text: impl Into<String>, error: bool) {
+        let text = text.into();
+        if error {
+            eprintln!("fathom: {text}");
+        }
+        self.notes.push(Note {
+            text,
+            error,
+            at: Instant::now(),
+        });
+        if self.notes.len() > 8 {
+            self.notes.remove(0);
+        }
+    }
+
+    /// The camera frames are rendered from.
+    pub fn view_camera(&self) -> fathom_core::Camera {
+        self.camera.camera()
+    }
+
+    /// The key of the view on screen now.
+    pub fn current_key(&self) -> u64 {
+        view_key(
+            &self.view_camera(),
+            self.generation,
+            &self.settings.base_request(),
+        )
+    }
+
+    /// Whether the viewport shows the final refinement of the current view.
+    pub fn settled(&self) -> bool {
+        self.viewport.settled(self.current_key())
+    }
+
+    /// Replaces the document's scene (an open, a reload, an undo), sending it to the worker.
+    fn replace_scene(&mut self, scene: Scene, label: Option<&str>) {
+        if let Some(l) = label {
+            self.history.record(l, self.scene.clone());
+        }
+        self.scene = scene;
+        self.scene_changed();
+    }
+
+    /// After any change of `self.scene`: new generation, the window's tape, the worker.
+    fn scene_changed(&mut self) {
+        self.generation += 1;
+        if self.tape.update_params(&self.scene).is_err() {
+            match Tape::compile(&self.scene) {
+                Ok(t) => self.tape = t,
+                Err(e) => self.note(e.to_string(), true),
+            }
+        }
+        if tree::node_at(&self.scene.root, &self.selected).is_none() {
+            self.selected.clear();
+        }
+        self.worker.set_scene(self.generation, self.scene.clone());
+        self.pending_edit = Some((self.generation, Instant::now()));
+    }
+
+    /// Keeps an edit made by the panels this frame (or refuses it), recording one undo step
+    /// per gesture.
+    fn commit(&mut self, ctx: &egui::Context, before: Scene) {
+        if self.scene == before {
+            if ctx.dragged_id().is_none() {
+                self.gesture = None;
+            }
+            return;
+        }
+        if let Err(e) = self.scene.validate() {
+            self.note(format!("edit refused: {e}"), true);
+            self.scene = before;
+            return;
+        }
+        let gesture = ctx.dragged_id().or_else(|| ctx.memory(|m| m.focused()));
+        if gesture.is_none() || gesture != self.gesture {
+            let label = if self.edit_label.is_empty() {
+                "edit".to_string()
+            } else {
+                std::mem::take(&mut self.edit_label)
+            };
+            self.history.record(label, before);
+        }
+        self.gesture = gesture;
+        self.scene_changed();
+    }
+
+    fn undo(&mut self) {
+        if let Some((label, s)) = self.history.undo(&self.scene) {
+            self.scene = s;
+            self.scene_changed();
+            self.note(format!("undid {label}"), false);
+        }
+    }
+
+    fn redo(&mut self) {
+        if let Some((label, s)) = self.history.redo(&self.scene) {
+            self.scene = s;
+            self.scene_changed();
+            self.note(format!("redid {label}"), false);
+        }
+    }
+
+    /// Opens a scene file; a bad file is reported with its position and changes nothing.
+    pub fn open(&mut self, path: &Path) {
+        match scene_file::load(path) {
+            Ok(s) => {
+                self.camera = CameraController::new(&s.camera);
+                self.file_camera = Some(s.camera.clone());
+                self.replace_scene(s, Some("open file"));
+                self.path = Some(path.to_path_buf());
+                self.watch = Some(Watch::new(path.to_path_buf()));
+                self.name = path.display().to_string();
+                self.note(format!("opened {}", path.display()), false);
+            }
+            Err(e) => self.note(format!("{e} (the scene was kept)"), true),
+        }
+    }
+
+    /// Writes the scene (with the current view as its camera) to `path`.
+    fn save(&mut self, path: &Path) {
+        let mut s = self.scene.clone();
+        s.camera = self.view_camera();
+        match scene_file::save(path, &s) {
+            Ok(()) => {
+                self.path = Some(path.to_path_buf());
+                let mut w = Watch::new(path.to_path_buf());
+                w.touch();
+                self.watch = Some(w);
+                self.file_camera = Some(s.camera.clone());
+                self.name = path.display().to_string();
+                self.note(format!("saved {}", path.display()), false);
+            }
+            Err(e) => self.note(e.to_string(), true),
+        }
+    }
+
+    fn load_preset(&mut self, name: &str) {
+        match presets::load(name) {
+            Ok(s) => {
+                self.camera = CameraController::new(&s.camera);
+                self.replace_scene(s, Some("load preset"));
+                self.name = format!("preset {name}");
+                self.path = None;
+                self.watch = None;
+            }
+            Err(e) => self.note(e.to_string(), true),
+        }
+    }
+
+    /// Replies from the worker: frames to upload, edits applied or refused.
+    fn poll_worker(&mut self, ctx: &egui::Context) {
+        for reply in self.worker.poll() {
+            match reply {
+                Reply::Frame(done) => {
+                    self.compiles = done.counters.compiles;
+                    let generation = done.generation;
+                    let note = done.result.as_ref().ok().and_then(|p| p.stats.note.clone());
+                    if let Some(image) = self.viewport.accept(*done) {
+                        match &mut self.viewport.texture {
+                            Some(t) => t.set(image, egui::TextureOptions::LINEAR),
+                            None => {
+                                self.viewport.texture = Some(ctx.load_texture(
+                                    "fathom viewport",
+                                    image,
+                                    egui::TextureOptions::LINEAR,
+                                ))
+                            }
+                        }
+                        if let Some((g, t)) = self.pending_edit
+                            && generation >= g
+                        {
+                            self.edit_latency_ms = Some(t.elapsed().as_secs_f64() * 1e3);
+                            self.pending_edit = None;
+                        }
+                        if let Some(n) = note
+                            && !self.notes.iter().any(|x| x.text == n)
+                        {
+                            self.note(n, false);
+                        }
+                    }
+                    if let Some(e) = self.viewport.error.take() {
+                        self.note(e, true);
+                    }
+                }
+                Reply::Scene(applied) => {
+                    if let Err(e) = applied.result {
+                        self.note(format!("the renderer refused the edit: {e}"), true);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The watched file, dropped files, finished screenshots.
+    fn poll_files(&mut self, ctx: &egui::Context) {
+        if let Some(w) = &mut self.watch
+            && w.changed()
+        {
+            let path = w.path.clone();
+            match scene_file::load(&path) {
+                Ok(s) => {
+                    if self.file_camera.as_ref() != Some(&s.camera) {
+                        self.camera = CameraController::new(&s.camera);
+                        self.file_camera = Some(s.camera.clone());
+                    }
+                    if s != self.scene {
+                        self.replace_scene(s, Some("reload from disk"));
+                        self.note(format!("reloaded {}", path.display()), false);
+                    }
+                }
+                Err(e) => self.note(format!("{e} (the scene on screen was kept)"), true),
+            }
+        }
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .collect()
+        });
+        if let Some(p) = dropped.last() {
+            self.open(p);
+        }
+        let mut done = Vec::new();
+        for (i, s) in self.shots.iter_mut().enumerate() {
+            if let Some(r) = s.poll() {
+                done.push((i, r, s.path.clone()));
+            }
+        }
+        for (i, r, p) in done.into_iter().rev() {
+            self.shots.remove(i);
+            match r {
+                Ok(()) => self.note(format!("wrote {}", p.display()), false),
+                Err(e) => self.note(e, true),
+            }
+        }
+    }
+
+    fn shortcuts(&mut self, ctx: &egui::Context) {
+        use egui::{Key, KeyboardShortcut, Modifiers};
+        let sc = |m, k| KeyboardShortcut::new(m, k);
+        let (undo, redo, redo2, save, open) = ctx.input_mut(|i| {
+            (
+                i.consume_shortcut(&sc(Modifiers::COMMAND, Key::Z)),
+                i.consume_shortcut(&sc(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)),
+                i.consume_shortcut(&sc(Modifiers::COMMAND, Key::Y)),
+                i.consume_shortcut(&sc(Modifiers::COMMAND, Key::S)),
+                i.consume_shortcut(&sc(Modifiers::COMMAND, Key::O)),
+            )
+        });
+        if undo {
+            self.undo();
+        }
+        if redo || redo2 {
+            self.redo();
+        }
+        if save {
+            match self.path.clone() {
+                Some(p) => self.save(&p),
+                None => self.browser.open(BrowseFor::Save, None),
+            }
+        }
+        if open {
+            self.browser.open(BrowseFor::Open, self.path.as_deref());
+        }
+        if ctx.egui_wants_keyboard_input() {
+            return;
+        }
+        let (f12, digits, ctrl) = ctx.input(|i| {
+            let digits: Vec<usize> = (1..=9)
+                .filter(|d| {
+                    let k = Key::from_name(&d.to_string()).expect("digit keys exist");
+                    i.key_pressed(k)
+                })
+                .collect();
+            (i.key_pressed(Key::F12), digits, i.modifiers.command)
+        });
+        if f12 {
+            self.shot_dialog.open = true;
+        }
+        for d in digits {
+            if ctrl {
+                while self.bookmarks.len() < d {
+                    self.bookmarks.push((
+                        format!("view {}", self.bookmarks.len() + 1),
+                        self.camera.clone(),
+                    ));
+                }
+                self.bookmarks[d - 1].1 = self.camera.clone();
+                self.note(format!("stored bookmark {d}"), false);
+            } else if let Some((_, c)) = self.bookmarks.get(d - 1) {
+                self.camera = c.clone();
+            }
+        }
+    }
+
+    fn menu_bar(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::top("menu").show(ui, |ui| {
+            egui::MenuBar::new().ui(ui, |ui| {
+                ui.menu_button("File", |ui| {
+                    if ui.button("Open... (Ctrl+O)").clicked() {
+                        self.browser.open(BrowseFor::Open, self.path.as_deref());
+                        ui.close();
+                    }
+                    if ui.button("Save (Ctrl+S)").clicked() {
+                        match self.path.clone() {
+                            Some(p) => self.save(&p),
+                            None => self.browser.open(BrowseFor::Save, None),
+                        }
+                        ui.close();
+                    }
+                    if ui.button("Save as...").clicked() {
+                        self.browser.open(BrowseFor::Save, self.path.as_deref());
+                        ui.close();
+                    }
+                    if ui.button("Screenshot... (F12)").clicked() {
+                        self.shot_dialog.open = true;
+                        ui.close();
+                    }
+                    if ui.button("Quit").clicked() {
+                        ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                    }
+                });
+                ui.menu_button("Edit", |ui| {
+                    let u = self.history.next_undo().map(|l| format!("Undo {l}"));
+                    if ui
+                        .add_enabled(
+                            u.is_some(),
+                            egui::Button::new(u.as_deref().unwrap_or("Undo")),
+                        )
+                        .clicked()
+                    {
+                        self.undo();
+                        ui.close();
+                    }
+                    let r = self.history.next_redo().map(|l| format!("Redo {l}"));
+                    if ui
+                        .add_enabled(
+                            r.is_some(),
+                            egui::Button::new(r.as_deref().unwrap_or("Redo")),
+                        )
+                        .clicked()
+                    {
+                        self.redo();
+                        ui.close();
+                    }
+                });
+                ui.menu_button("View", |ui| {
+                    if ui.button("Store bookmark").clicked() {
+                        let n = self.bookmarks.len() + 1;
+                        self.bookmarks
+                            .push((format!("view {n}"), self.camera.clone()));
+                        ui.close();
+                    }
+                    let mut go = None;
+                    for (i, (name, _)) in self.bookmarks.iter().enumerate() {
+                        if ui.button(format!("{} ({})", name, i + 1)).clicked() {
+                            go = Some(i);
+                            ui.close();
+                        }
+                    }
+                    if let Some(i) = go {
+                        self.camera = self.bookmarks[i].1.clone();
+                    }
+                    if ui.button("Fly (leave orbit)").clicked() {
+                        self.camera.mode = Mode::Fly;
+                        ui.close();
+                    }
+                    if ui.button("Reset view to the scene's camera").clicked() {
+                        self.camera = CameraController::new(&self.scene.camera);
+                        ui.close();
+                    }
+                });
+                ui.menu_button("Help", |ui| {
+                    if ui.button("Keys and mouse").clicked() {
+                        self.show_help = true;
+                        ui.close();
+                    }
+                });
+            });
+        });
+    }
+
+    fn status_bar(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::bottom("status").show(ui, |ui| {
+            ui.horizontal_wrapped(|ui| {
+                self.notes
+                    .retain(|n| n.error || n.at.elapsed() < Duration::from_secs(8));
+                match self.notes.last() {
+                    Some(n) if n.error => {
+                        ui.colored_label(egui::Color32::from_rgb(255, 120, 110), &n.text);
+                    }
+                    Some(n) => {
+                        ui.label(&n.text);
+                    }
+                    None => {
+                        ui.label(&self.name);
+                    }
+                }
+                if self.notes.last().is_some_and(|n| n.error)
+                    && ui.small_button("dismiss").clicked()
+                {
+                    self.notes.pop();
+                }
+                for s in &self.shots {
+                    ui.add(
+                        egui::ProgressBar::new(s.fraction())
+                            .desired_width(120.0)
+                            .text(format!("{}", s.path.display())),
+                    );
+                }
+            });
+        });
+    }
+
+    fn left_panel(&mut self, ui: &mut egui::Ui) {
+        let mut actions: Vec<TreeAction> = Vec::new();
+        egui::Panel::left("scene")
+            .resizable(true)
+            .default_size(280.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    ui.heading("Scene");
+                    let mut pick = None;
+                    egui::ComboBox::new("preset", "preset")
+                        .selected_text("choose...")
+                        .show_ui(ui, |ui| {
+                            for p in PRESETS {
+                                if ui
+                                    .selectable_label(false, p.name)
+                                    .on_hover_text(p.description)
+                                    .clicked()
+                                {
+                                    pick = Some(p.name);
+                                }
+                            }
+                        });
+                    if let Some(p) = pick {
+                        self.load_preset(p);
+                    }
+                    ui.separator();
+                    ui.strong("Tree");
+                    actions.extend(tree::tree_ui(ui, &self.scene.root, &self.selected));
+                    actions.extend(tree::node_buttons(ui, &self.selected));
+                    ui.separator();
+                    let mut notes = Vec::new();
+                    ui.collapsing("IFS loop", |ui| {
+                        if tree::ifs_editor(ui, &mut self.scene.ifs, &mut notes) {
+                            self.edit_label = "edit the IFS loop".into();
+                        }
+                    });
+                    ui.collapsing("Lights", |ui| {
+                        if look::lights_editor(ui, &mut self.scene.lights) {
+                            self.edit_label = "edit lights".into();
+                        }
+                    });
+                    ui.collapsing("Sky, shading and tracing", |ui| {
+                        if look::render_settings_editor(ui, &mut self.scene.render) {
+                            self.edit_label = "edit render settings".into();
+                        }
+                    });
+                    for n in notes {
+                        self.note(n, false);
+                    }
+                });
+            });
+        self.tree_actions.extend(actions);
+    }
+
+    /// Applies the tree edits the panels asked for (after the panels' own edits are kept).
+    fn apply_tree_actions(&mut self) {
+        for a in std::mem::take(&mut self.tree_actions) {
+            let before = self.scene.clone();
+            match tree::apply(&mut self.scene, &a, &mut self.selected) {
+                Ok(()) if self.scene != before => {
+                    if let Err(e) = self.scene.validate() {
+                        self.note(format!("{}: {e}", a.label()), true);
+                        self.scene = before;
+                    } else {
+                        self.history.record(a.label(), before);
+                        self.scene_changed();
+                    }
+                }
+                Ok(()) => {}
+                Err(e) => self.note(format!("{}: {e}", a.label()), true),
+            }
+        }
+    }
+
+    fn right_panel(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::right("inspector")
+            .resizable(true)
+            .default_size(300.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    ui.heading("Node");
+                    let mut notes = Vec::new();
+                    let path = self.selected.clone();
+                    if let Some(n) = tree::node_at_mut(&mut self.scene.root, &path) {
+                        let label = tree::node_label(n, path.is_empty());
+                        ui.label(format!("{label} at root{}", path_text(&path)));
+                        if tree::node_inspector(ui, n, &path, &mut notes) {
+                            self.edit_label = format!("edit {label}");
+                        }
+                    }
+                    for n in notes {
+                        self.note(n, false);
+                    }
+                    ui.separator();
+                    ui.heading("Renderer");
+                    self.renderer_settings(ui);
+                });
+            });
+    }
+
+    fn renderer_settings(&mut self, ui: &mut egui::Ui) {
+        let s = &mut self.settings;
+        egui::ComboBox::new("backend", "renderer")
+            .selected_text(match s.backend {
+                Backend::Trace => "CPU tracer",
+                Backend::Gpu => "GPU tracer",
+                Backend::Octree => "octree",
+            })
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut s.backend, Backend::Trace, "CPU tracer");
+                ui.selectable_value(&mut s.backend, Backend::Gpu, "GPU tracer");
+                ui.selectable_value(&mut s.backend, Backend::Octree, "octree");
+            });
+        ui.horizontal(|ui| {
+            ui.label("step rule");
+            ui.selectable_value(&mut s.tracer, TracerRule::Enhanced, "enhanced");
+            ui.selectable_value(&mut s.tracer, TracerRule::Basic, "basic");
+        });
+        ui.checkbox(&mut s.prepass, "cone-marching prepass");
+        ui.add(egui::Slider::new(&mut s.ssao, 0.0..=4.0).text("SSAO"));
+        if s.backend == Backend::Octree {
+            ui.add(
+                egui::Slider::new(&mut s.fidelity, 0.25..=16.0)
+                    .logarithmic(true)
+                    .text("voxel size (px)"),
+            );
+        }
+        ui.horizontal(|ui| {
+            ui.label("stereo");
+            ui.selectable_value(&mut s.stereo, Stereo::Mono, "mono");
+            ui.selectable_value(&mut s.stereo, Stereo::SideBySide, "side by side");
+            ui.selectable_value(&mut s.stereo, Stereo::Ods, "360 (ODS)");
+        });
+        if s.stereo != Stereo::Mono {
+            ui.add(
+                egui::Slider::new(&mut s.eye_separation, 0.0..=1.0)
+                    .logarithmic(true)
+                    .text("eye separation"),
+            );
+        }
+        if s.backend == Backend::Octree && s.stereo != Stereo::Mono {
+            s.stereo = Stereo::Mono;
+        }
+        let mut target = self.viewport.scale.target_ms();
+        if ui
+            .add(egui::Slider::new(&mut target, 8.0..=200.0).text("target frame ms"))
+            .changed()
+        {
+            self.viewport.scale.set_target_ms(target);
+        }
+        let mut ss = self.viewport.refine_supersample;
+        ui.add(egui::Slider::new(&mut ss, 1..=4).text("refine supersampling"));
+        self.viewport.refine_supersample = ss;
+    }
+
+    /// The viewport: camera input, the frame, the stats overlay. Returns its size in pixels.
+    fn central(&mut self, ui: &mut egui::Ui, dt: f64) {
+        egui::CentralPanel::no_frame().show(ui, |ui| {
+            let rect = ui.available_rect_before_wrap();
+            let r = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+            let ppp = ui.ctx().pixels_per_point();
+            self.viewport_px = (
+                (rect.width() * ppp).round().max(0.0) as u32,
+                (rect.height() * ppp).round().max(0.0) as u32,
+            );
+            // Camera: click to orbit the surface point under the cursor, drag to look, keys.
+            if r.clicked()
+                && let Some(pos) = r.interact_pointer_pos()
+            {
+                let cam = self.view_camera();
+                let f = cam.frame();
+                let (px, py) = ((pos.x - rect.left()) * ppp, (pos.y - rect.top()) * ppp);
+                let (w, h) = self.viewport_px;
+                let d = f.ray_dir(px as f64, py as f64, w.max(1), h.max(1));
+                let eps = 0.5 * f.pixel_angle(h.max(1));
+                match camera::pick(&self.tape, cam.eye, d, eps, self.scene.render.max_distance) {
+                    Some(p) => {
+                        self.camera.orbit_around(p);
+                        self.note("orbiting the picked point (click the sky to fly)", false);
+                    }
+                    None => self.camera.mode = Mode::Fly,
+                }
+            }
+            let controls = input::controls(ui.ctx(), &r);
+            let d_eye = camera::distance_at(&self.tape, self.camera.eye);
+            self.camera.step(&controls, dt, d_eye);
+            let painter = ui.painter_at(rect);
+            painter.rect_filled(rect, 0.0, egui::Color32::from_gray(20));
+            if let Some(t) = &self.viewport.texture {
+                painter.image(
+                    t.id(),
+                    rect,
+                    egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                    egui::Color32::WHITE,
+                );
+            }
+            self.overlay(&painter, rect);
+        });
+    }
+
+    fn overlay(&self, painter: &egui::Painter, rect: egui::Rect) {
+        let mut lines = vec![format!("{:.0} fps (window)", 1e3 / self.ui_ms.max(1e-3))];
+        if let Some(s) = &self.viewport.shown {
+            let st = &s.stats;
+            lines.push(format!(
+                "{} {} {}x{}{} in {:.1} ms",
+                st.renderer,
+                match s.stage {
+                    Stage::Interactive => "interactive",
+                    Stage::Full => "full",
+                    Stage::Supersampled => "supersampled",
+                },
+                s.request.width,
+                s.request.height,
+                if s.request.supersample > 1 {
+                    format!(" x{}", s.request.supersample)
+                } else {
+                    String::new()
+                },
+                s.ms
+            ));
+            lines.push(format!(
+                "scale {:.2}  prepass {:.1}  trace {:.1}  post {:.1} ms",
+                self.viewport.scale.scale(),
+                st.ms.prepass,
+                st.ms.trace_and_shade,
+                st.ms.post
+            ));
+            lines.push(format!(
+                "DE/px {:.2}{}",
+                st.depth_de_per_pixel,
+                if st.deep_f64_path { "  f64 path" } else { "" }
+            ));
+            if let Some(o) = &st.octree {
+                lines.push(format!(
+                    "octree {} nodes, {:.1} MiB, {:.1} nodes/ray{}",
+                    o.nodes,
+                    o.arena_bytes as f64 / 1048576.0,
+                    o.nodes_per_ray,
+                    match s.octree_requests {
+                        Some(0) => ", settled".to_string(),
+                        Some(n) => format!(", {n} to subdivide"),
+                        None => String::new(),
+                    }
+                ));
+            }
+        }
+        if let Some(ms) = self.viewport.full_after_still_ms {
+            lines.push(format!("full resolution {ms:.0} ms after stopping"));
+        }
+        if let Some(ms) = self.edit_latency_ms {
+            lines.push(format!(
+                "last edit on screen after {ms:.0} ms; {} compile(s)",
+                self.compiles
+            ));
+        }
+        let text = lines.join("\n");
+        let pos = rect.left_top() + egui::vec2(8.0, 8.0);
+        let galley = painter.layout_no_wrap(
+            text,
+            egui::FontId::monospace(11.0),
+            egui::Color32::from_gray(235),
+        );
+        let bg = egui::Rect::from_min_size(pos, galley.size()).expand(4.0);
+        painter.rect_filled(bg, 3.0, egui::Color32::from_black_alpha(150));
+        painter.galley(pos, galley, egui::Color32::WHITE);
+    }
+
+    fn dialogs(&mut self, ctx: &egui::Context) {
+        if let Some((purpose, p)) = self.browser.show(ctx) {
+            match purpose {
+                BrowseFor::Open => self.open(&p),
+                BrowseFor::Save => self.save(&p),
+            }
+        }
+        if self.show_help {
+            egui::Window::new("Keys and mouse")
+                .open(&mut self.show_help)
+                .show(ctx, |ui| {
+                    ui.monospace(input::KEY_HELP);
+                });
+        }
+        let mut start = false;
+        if self.shot_dialog.open {
+            let d = &mut self.shot_dialog;
+            egui::Window::new("Screenshot")
+                .open(&mut d.open)
+                .show(ctx, |ui| {
+                    ui.horizontal(|ui| {
+                        ui.add(egui::DragValue::new(&mut d.width).range(16..=16384));
+                        ui.label("x");
+                        ui.add(egui::DragValue::new(&mut d.height).range(16..=16384));
+                        ui.label("pixels (per eye)");
+                    });
+                    ui.add(egui::Slider::new(&mut d.supersample, 1..=4).text("supersampling"));
+                    ui.horizontal(|ui| {
+                        ui.selectable_value(&mut d.stereo, Stereo::Mono, "mono");
+                        ui.selectable_value(&mut d.stereo, Stereo::SideBySide, "side by side");
+                        ui.selectable_value(&mut d.stereo, Stereo::Ods, "360 stereo (ODS)");
+                    });
+                    ui.horizontal(|ui| {
+                        ui.label("file");
+                        ui.text_edit_singleline(&mut d.path);
+                    });
+                    if ui.button("Render").clicked() {
+                        start = true;
+                    }
+                });
+        }
+        if start {
+            self.shot_dialog.open = false;
+            self.start_shot();
+        }
+    }
+
+    /// The offline request for a screenshot of the current view.
+    pub fn shot_request(
+        &self,
+        width: u32,
+        height: u32,
+        supersample: u32,
+        stereo: Stereo,
+    ) -> RenderRequest {
+        let settings = ViewSettings {
+            stereo,
+            backend: match self.settings.backend {
+                Backend::Octree => Backend::Octree,
+                _ => Backend::Trace,
+            },
+            ..self.settings.clone()
+        };
+        RenderRequest {
+            width,
+            height,
+            supersample,
+            ..settings.base_request()
+        }
+    }
+
+    fn start_shot(&mut self) {
+        let d = &self.shot_dialog;
+        let req = self.shot_request(d.width, d.height, d.supersample, d.stereo);
+        if let Err(e) = req.validate() {
+            self.note(format!("screenshot: {e}"), true);
+            return;
+        }
+        let path = PathBuf::from(d.path.trim());
+        self.shots.push(Shot::start(
+            self.scene.clone(),
+            self.view_camera(),
+            req,
+            path,
+        ));
+    }
+
+    /// One window frame of logic after the panels: scheduling, the scripted run, the log.
+    fn after_panels(&mut self, ctx: &egui::Context) {
+        let cam = self.view_camera();
+        let base = self.settings.base_request();
+        let key = view_key(&cam, self.generation, &base);
+        self.viewport
+            .schedule(&self.worker, key, &cam, &base, self.viewport_px);
+        self.frames += 1;
+        let line = FrameLog {
+            frame: self.frames,
+            frame_ms: self.ui_ms,
+            render_scale: self.viewport.scale.scale(),
+            renderer: self
+                .viewport
+                .shown
+                .as_ref()
+                .map(|s| s.stats.renderer)
+                .unwrap_or(""),
+            stage: self.viewport.shown.as_ref().map(|s| s.stage),
+            render_ms: self.viewport.shown.as_ref().map(|s| s.ms),
+            shown: self
+                .viewport
+                .shown
+                .as_ref()
+                .map(|s| (s.request.width, s.request.height)),
+            settled: self.viewport.settled(key),
+            full_after_still_ms: self.viewport.full_after_still_ms,
+            edit_latency_ms: self.edit_latency_ms,
+            compiles: self.compiles,
+            camera: cam.clone(),
+        };
+        if let Err(e) = self.script.log(&line) {
+            self.note(e, true);
+        }
+        if self.script.finished(self.frames) && !self.script.closing {
+            self.script.closing = true;
+            if let Some(p) = self.script.screenshot.clone() {
+                let (w, h) = self.viewport_px;
+                let req = self.shot_request(w.max(16), h.max(16), 1, self.settings.stereo);
+                let r = crate::shot::render(self.scene.clone(), &cam, &req, &p, &|_| {});
+                match r {
+                    Ok(()) => eprintln!("fathom: wrote {}", p.display()),
+                    Err(e) => {
+                        eprintln!("fathom: screenshot failed: {e}");
+                        self.script.failed = Some(e);
+                    }
+                }
+            }
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
+        // Keep drawing while something moves or renders; otherwise the worker wakes us.
+        let moving = self.viewport.busy()
+            || !self.viewport.settled(key)
+            || ctx.input(|i| i.pointer.is_decidedly_dragging() || !i.keys_down.is_empty())
+            || self.script.frames.is_some()
+            || !self.shots.is_empty();
+        if moving {
+            ctx.request_repaint();
+        } else if self.watch.is_some() {
+            ctx.request_repaint_after(Duration::from_millis(500));
+        }
+    }
+
+    /// Why the scripted run failed, if it did.
+    pub fn script_error(&self) -> Option<&str> {
+        self.script.failed.as_deref()
+    }
+}
+
+fn path_text(p: &NodePath) -> String {
+    p.iter().map(|i| format!(".children[{i}]")).collect()
+}
+
+impl eframe::App for ExplorerApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        let now = Instant::now();
+        let dt = now.duration_since(self.last_frame).as_secs_f64();
+        self.ui_ms = dt * 1e3;
+        self.last_frame = now;
+        self.poll_worker(&ctx);
+        self.poll_files(&ctx);
+        self.shortcuts(&ctx);
+        let before = self.scene.clone();
+        self.menu_bar(ui);
+        self.status_bar(ui);
+        self.left_panel(ui);
+        self.right_panel(ui);
+        self.central(ui, dt);
+        self.dialogs(&ctx);
+        self.commit(&ctx, before);
+        self.apply_tree_actions();
+        self.after_panels(&ctx);
+    }
+
+    fn on_exit(&mut self) {
+        if let Some(e) = &self.script.failed
+            && let Ok(mut g) = self.exit_error.lock()
+        {
+            *g = Some(e.clone());
+        }
+    }
+}

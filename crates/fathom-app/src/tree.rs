@@ -1,0 +1,482 @@
+//! The scene-tree editor: the tree (select, add, duplicate, remove, reorder, reparent by drag)
+//! and the inspector of the selected node (its primitive or fractal and parameters, the
+//! combine operator and its smoothness, the ordered domain operators, the material), plus the
+//! root's IFS loop. Every picker and slider comes from the registry ([`crate::params`]).
+//!
+//! The tree is drawn from the scene and returns [`TreeAction`]s, applied after the pass by
+//! [`apply`], which refuses moves that would make a node its own ancestor.
+
+use crate::params::{call_params, entry_picker};
+use fathom_core::combine::Combine;
+use fathom_core::limits;
+use fathom_core::primitives::Primitive;
+use fathom_core::registry::Family;
+use fathom_core::scene::{Call, DomainOp, Ifs, Material, Node, Scene, Shape};
+use fathom_core::transforms::Transform;
+
+/// A node's place: child indices from the root (empty: the root).
+pub type NodePath = Vec<usize>;
+
+/// A structural edit of the tree.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TreeAction {
+    Select(NodePath),
+    AddChild(NodePath),
+    Duplicate(NodePath),
+    Remove(NodePath),
+    MoveUp(NodePath),
+    MoveDown(NodePath),
+    /// Makes `node` the last child of `parent`.
+    Reparent {
+        node: NodePath,
+        parent: NodePath,
+    },
+}
+
+impl TreeAction {
+    /// A label for the undo history.
+    pub fn label(&self) -> &'static str {
+        match self {
+            TreeAction::Select(_) => "select",
+            TreeAction::AddChild(_) => "add node",
+            TreeAction::Duplicate(_) => "duplicate node",
+            TreeAction::Remove(_) => "remove node",
+            TreeAction::MoveUp(_) | TreeAction::MoveDown(_) => "reorder nodes",
+            TreeAction::Reparent { .. } => "move node",
+        }
+    }
+}
+
+/// The node at `path`.
+pub fn node_at<'a>(root: &'a Node, path: &[usize]) -> Option<&'a Node> {
+    path.iter().try_fold(root, |n, &i| n.children.get(i))
+}
+
+/// The node at `path`, mutably.
+pub fn node_at_mut<'a>(root: &'a mut Node, path: &[usize]) -> Option<&'a mut Node> {
+    path.iter().try_fold(root, |n, &i| n.children.get_mut(i))
+}
+
+/// A short label for a node: its shape, and its combine unless it is the root.
+pub fn node_label(n: &Node, is_root: bool) -> String {
+    if is_root {
+        n.shape.kind.def().name.to_string()
+    } else {
+        format!(
+            "{} ({})",
+            n.shape.kind.def().name,
+            n.combine.kind.def().name
+        )
+    }
+}
+
+/// Applies a structural edit; `selected` follows the edited node. Errors say why an edit was
+/// refused (the scene is then unchanged).
+pub fn apply(scene: &mut Scene, a: &TreeAction, selected: &mut NodePath) -> Result<(), String> {
+    let root = &mut scene.root;
+    match a {
+        TreeAction::Select(p) => {
+            node_at(root, p).ok_or("no such node")?;
+            *selected = p.clone();
+        }
+        TreeAction::AddChild(p) => {
+            if root.count() >= limits::MAX_NODES {
+                return Err(format!(
+                    "the scene already has the most nodes ({})",
+                    limits::MAX_NODES
+                ));
+            }
+            let n = node_at_mut(root, p).ok_or("no such node")?;
+            n.children
+                .push(Node::new(Primitive::Sphere).combine(Combine::Union));
+            *selected = p.iter().copied().chain([n.children.len() - 1]).collect();
+        }
+        TreeAction::Duplicate(p) => {
+            let (last, parent) = p.split_last().ok_or("the root cannot be duplicated")?;
+            let copy = node_at(root, p).ok_or("no such node")?.clone();
+            if root.count() + copy.count() > limits::MAX_NODES {
+                return Err(format!("the copy would exceed {} nodes", limits::MAX_NODES));
+            }
+            let parent_node = node_at_mut(root, parent).ok_or("no such node")?;
+            parent_node.children.insert(last + 1, copy);
+            *selected = parent.iter().copied().chain([last + 1]).collect();
+        }
+        TreeAction::Remove(p) => {
+            let (last, parent) = p.split_last().ok_or("the root cannot be removed")?;
+            let parent_node = node_at_mut(root, parent).ok_or("no such node")?;
+            if *last >= parent_node.children.len() {
+                return Err("no such node".into());
+            }
+            parent_node.children.remove(*last);
+            *selected = parent.to_vec();
+        }
+        TreeAction::MoveUp(p) | TreeAction::MoveDown(p) => {
+            let (last, parent) = p.split_last().ok_or("the root has no siblings")?;
+            let parent_node = node_at_mut(root, parent).ok_or("no such node")?;
+            let n = parent_node.children.len();
+            let to = match a {
+                TreeAction::MoveUp(_) if *last > 0 => last - 1,
+                TreeAction::MoveDown(_) if last + 1 < n => last + 1,
+                _ => return Ok(()),
+            };
+            parent_node.children.swap(*last, to);
+            *selected = parent.iter().copied().chain([to]).collect();
+        }
+        TreeAction::Reparent { node, parent } => {
+            if node.is_empty() {
+                return Err("the root cannot be moved".into());
+            }
+            if parent.starts_with(node) {
+                return Err("a node cannot be moved into its own subtree".into());
+            }
+            let (last, old_parent) = node.split_last().expect("not the root");
+            if old_parent == parent.as_slice() {
+                return Ok(()); // already there
+            }
+            node_at(root, parent).ok_or("no such parent")?;
+            let moved = node_at_mut(root, old_parent)
+                .and_then(|p| (*last < p.children.len()).then(|| p.children.remove(*last)))
+                .ok_or("no such node")?;
+            // Removing the node shifts later siblings (and paths through them) down by one.
+            let mut target = parent.clone();
+            if target.len() > old_parent.len()
+                && target.starts_with(old_parent)
+                && target[old_parent.len()] > *last
+            {
+                target[old_parent.len()] -= 1;
+            }
+            let p = node_at_mut(root, &target).expect("checked above");
+            p.children.push(moved);
+            *selected = target
+                .iter()
+                .copied()
+                .chain([p.children.len() - 1])
+                .collect();
+        }
+    }
+    Ok(())
+}
+
+/// Draws the tree; returns the actions asked for.
+pub fn tree_ui(ui: &mut egui::Ui, root: &Node, selected: &NodePath) -> Vec<TreeAction> {
+    let mut actions = Vec::new();
+    node_row(ui, root, &mut Vec::new(), selected, &mut actions);
+    actions
+}
+
+fn node_row(
+    ui: &mut egui::Ui,
+    n: &Node,
+    path: &mut NodePath,
+    selected: &NodePath,
+    actions: &mut Vec<TreeAction>,
+) {
+    let id = egui::Id::unique(("tree node", path.clone()));
+    let is_root = path.is_empty();
+    let label = node_label(n, is_root);
+    let header = |ui: &mut egui::Ui, actions: &mut Vec<TreeAction>| {
+        let (_, dropped) = ui.dnd_drop_zone::<NodePath, ()>(egui::Frame::NONE, |ui| {
+            ui.horizontal(|ui| {
+                let r = ui
+                    .dnd_drag_source(id.with("drag"), path.clone(), |ui| {
+                        ui.selectable_label(selected == path, &label)
+                    })
+                    .inner;
+                if r.clicked() {
+                    actions.push(TreeAction::Select(path.clone()));
+                }
+                r.context_menu(|ui| {
+                    if ui.button("Add child").clicked() {
+                        actions.push(TreeAction::AddChild(path.clone()));
+                        ui.close();
+                    }
+                    if !is_root {
+                        for (text, a) in [
+                            ("Duplicate", TreeAction::Duplicate(path.clone())),
+                            ("Move up", TreeAction::MoveUp(path.clone())),
+                            ("Move down", TreeAction::MoveDown(path.clone())),
+                            ("Remove", TreeAction::Remove(path.clone())),
+                        ] {
+                            if ui.button(text).clicked() {
+                                actions.push(a);
+                                ui.close();
+                            }
+                        }
+                    }
+                });
+            });
+        });
+        if let Some(p) = dropped {
+            actions.push(TreeAction::Reparent {
+                node: (*p).clone(),
+                parent: path.clone(),
+            });
+        }
+    };
+    if n.children.is_empty() {
+        ui.horizontal(|ui| {
+            ui.add_space(18.0);
+            header(ui, actions);
+        });
+    } else {
+        egui::collapsing_header::CollapsingState::load_with_default_open(ui.ctx(), id, true)
+            .show_header(ui, |ui| header(ui, actions))
+            .body(|ui| {
+                for (i, c) in n.children.iter().enumerate() {
+                    path.push(i);
+                    node_row(ui, c, path, selected, actions);
+                    path.pop();
+                }
+            });
+    }
+}
+
+/// Buttons acting on the selected node.
+pub fn node_buttons(ui: &mut egui::Ui, selected: &NodePath) -> Vec<TreeAction> {
+    let mut actions = Vec::new();
+    ui.horizontal_wrapped(|ui| {
+        if ui.button("Add child").clicked() {
+            actions.push(TreeAction::AddChild(selected.clone()));
+        }
+        let not_root = !selected.is_empty();
+        for (text, a) in [
+            ("Duplicate", TreeAction::Duplicate(selected.clone())),
+            ("Up", TreeAction::MoveUp(selected.clone())),
+            ("Down", TreeAction::MoveDown(selected.clone())),
+            ("Remove", TreeAction::Remove(selected.clone())),
+        ] {
+            if ui.add_enabled(not_root, egui::Button::new(text)).clicked() {
+                actions.push(a);
+            }
+        }
+    });
+    actions
+}
+
+/// The inspector of one node. Returns whether it changed.
+pub fn node_inspector(
+    ui: &mut egui::Ui,
+    n: &mut Node,
+    path: &NodePath,
+    notes: &mut Vec<String>,
+) -> bool {
+    let mut changed = false;
+    ui.push_id(("inspector", path.clone()), |ui| {
+        ui.strong("Shape");
+        changed |= entry_picker::<Shape>(ui, "shape", "shape", &mut n.shape);
+        changed |= call_params(ui, &mut n.shape, notes);
+        if !path.is_empty() {
+            ui.separator();
+            ui.strong("Combine with the parent");
+            changed |= entry_picker::<Combine>(ui, "combine", "combine", &mut n.combine);
+            changed |= call_params(ui, &mut n.combine, notes);
+        }
+        ui.separator();
+        ui.strong("Domain operators (in order)");
+        changed |= op_list(ui, &mut n.ops, notes);
+        ui.separator();
+        ui.strong("Material");
+        changed |= material_editor(ui, &mut n.material);
+    });
+    changed
+}
+
+/// An ordered list of calls of family `K`: each entry's picker and parameters, with buttons to
+/// move it, remove it, and add one.
+fn call_list<K: Family>(
+    ui: &mut egui::Ui,
+    ops: &mut Vec<Call<K>>,
+    notes: &mut Vec<String>,
+) -> bool {
+    let mut changed = false;
+    let mut remove = None;
+    let mut swap = None;
+    let n = ops.len();
+    for (i, op) in ops.iter_mut().enumerate() {
+        ui.push_id(i, |ui| {
+            ui.horizontal(|ui| {
+                changed |= entry_picker::<K>(ui, "op", "", op);
+                if ui.small_button("^").on_hover_text("earlier").clicked() && i > 0 {
+                    swap = Some((i, i - 1));
+                }
+                if ui.small_button("v").on_hover_text("later").clicked() && i + 1 < n {
+                    swap = Some((i, i + 1));
+                }
+                if ui.small_button("x").on_hover_text("remove").clicked() {
+                    remove = Some(i);
+                }
+            });
+            ui.indent("params", |ui| {
+                changed |= call_params(ui, op, notes);
+            });
+        });
+    }
+    if let Some((a, b)) = swap {
+        ops.swap(a, b);
+        changed = true;
+    }
+    if let Some(i) = remove {
+        ops.remove(i);
+        changed = true;
+    }
+    if ops.len() < limits::MAX_OPS_PER_LIST {
+        let mut add: Option<K> = None;
+        egui::ComboBox::new(ui.scope_id().with("add op"), "")
+            .selected_text("add operator...")
+            .show_ui(ui, |ui| {
+                for &k in K::all() {
+                    if ui
+                        .selectable_label(false, k.def().name)
+                        .on_hover_text(k.def().doc)
+                        .clicked()
+                    {
+                        add = Some(k);
+                    }
+                }
+            });
+        if let Some(k) = add {
+            ops.push(Call::new(k));
+            changed = true;
+        }
+    }
+    changed
+}
+
+fn op_list(ui: &mut egui::Ui, ops: &mut Vec<Call<DomainOp>>, notes: &mut Vec<String>) -> bool {
+    call_list(ui, ops, notes)
+}
+
+/// The root's IFS loop: on or off, iterations, and its ordered operators.
+pub fn ifs_editor(ui: &mut egui::Ui, ifs: &mut Option<Ifs>, notes: &mut Vec<String>) -> bool {
+    let mut changed = false;
+    let mut on = ifs.is_some();
+    if ui
+        .checkbox(&mut on, "IFS loop around the tree")
+        .on_hover_text("fold the space before the tree is evaluated, `iterations` times")
+        .changed()
+    {
+        *ifs = on.then(|| Ifs {
+            iterations: 4,
+            ops: vec![Call::new(Transform::ALL[0])],
+        });
+        changed = true;
+    }
+    if let Some(ifs) = ifs {
+        let mut it = ifs.iterations;
+        if ui
+            .add(egui::Slider::new(&mut it, 0..=limits::MAX_IFS_ITERATIONS).text("iterations"))
+            .changed()
+        {
+            ifs.iterations = it;
+            changed = true;
+        }
+        ui.push_id("ifs ops", |ui| {
+            changed |= call_list(ui, &mut ifs.ops, notes);
+        });
+    }
+    changed
+}
+
+/// The material of a node (ranges as the scene validation checks them).
+pub fn material_editor(ui: &mut egui::Ui, m: &mut Material) -> bool {
+    let mut changed = false;
+    let mut c = m.albedo.map(|v| v as f32);
+    ui.horizontal(|ui| {
+        if ui.color_edit_button_rgb(&mut c).changed() {
+            m.albedo = c.map(|v| (v as f64).clamp(0.0, 1.0));
+            changed = true;
+        }
+        ui.label("albedo");
+    });
+    changed |= ui
+        .add(egui::Slider::new(&mut m.specular, 0.0..=1.0).text("specular"))
+        .changed();
+    changed |= ui
+        .add(
+            egui::Slider::new(&mut m.shininess, 1.0..=4096.0)
+                .logarithmic(true)
+                .text("shininess"),
+        )
+        .changed();
+    changed |= ui
+        .add(egui::Slider::new(&mut m.trap_colour, 0.0..=1.0).text("trap colour"))
+        .on_hover_text("how much the orbit-trap palette replaces the albedo (fractals)")
+        .changed();
+    changed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene() -> Scene {
+        // root(a(b), c)
+        let b = Node::new(Primitive::Sphere);
+        let a = Node::new(Primitive::Sphere).child(b);
+        let c = Node::new(Primitive::Sphere);
+        Scene::new(Node::new(Primitive::Sphere).child(a).child(c))
+    }
+
+    #[test]
+    fn tree_edits_keep_the_selection_on_the_edited_node() {
+        let mut s = scene();
+        let mut sel = vec![];
+        apply(&mut s, &TreeAction::AddChild(vec![1]), &mut sel).unwrap();
+        assert_eq!(sel, vec![1, 0]);
+        assert_eq!(s.root.count(), 5);
+        apply(&mut s, &TreeAction::Duplicate(vec![0]), &mut sel).unwrap();
+        assert_eq!((sel.clone(), s.root.children.len()), (vec![1], 3));
+        assert_eq!(s.root.count(), 7);
+        apply(&mut s, &TreeAction::MoveDown(vec![0]), &mut sel).unwrap();
+        assert_eq!(sel, vec![1]);
+        apply(&mut s, &TreeAction::Remove(vec![1]), &mut sel).unwrap();
+        assert_eq!((sel, s.root.count()), (vec![], 5));
+        assert!(apply(&mut s, &TreeAction::Remove(vec![]), &mut vec![]).is_err());
+    }
+
+    #[test]
+    fn reparenting_moves_subtrees_and_refuses_cycles() {
+        let mut s = scene();
+        let mut sel = vec![];
+        // Move c (root.children[1]) under a (root.children[0]).
+        apply(
+            &mut s,
+            &TreeAction::Reparent {
+                node: vec![1],
+                parent: vec![0],
+            },
+            &mut sel,
+        )
+        .unwrap();
+        assert_eq!(s.root.children.len(), 1);
+        assert_eq!(s.root.children[0].children.len(), 2);
+        assert_eq!(sel, vec![0, 1]);
+        // Moving a into its own child is refused and changes nothing.
+        let before = s.clone();
+        let e = apply(
+            &mut s,
+            &TreeAction::Reparent {
+                node: vec![0],
+                parent: vec![0, 0],
+            },
+            &mut sel,
+        )
+        .unwrap_err();
+        assert!(e.contains("own subtree"), "{e}");
+        assert_eq!(s, before);
+        // Moving an earlier sibling's subtree under a later sibling fixes up the path.
+        let mut s = scene();
+        apply(
+            &mut s,
+            &TreeAction::Reparent {
+                node: vec![0],
+                parent: vec![1],
+            },
+            &mut sel,
+        )
+        .unwrap();
+        assert_eq!(sel, vec![0, 0]);
+        assert_eq!(s.root.children[0].children[0].children.len(), 1);
+        s.validate().unwrap();
+    }
+}

@@ -1,0 +1,256 @@
+//! The viewport's frame scheduling: which frame to ask the worker for next, and which to show.
+//!
+//! While the view moves (camera, scene or settings: its *key* changes), frames render at the
+//! dynamic scale ([`crate::scale::RenderScale`]) and the newest view is asked for as soon as
+//! the previous frame is back, so the screen follows at about the target frame time. When the
+//! view holds still, the frame is refined: full resolution, then supersampled. A refinement
+//! that goes stale (the view moved again) is cancelled at once; an interactive frame is let
+//! finish (it is short) unless it has run past twice the target. Octree frames step the tree
+//! instead, at full resolution (the octree holds its frame time by its subdivision budget),
+//! until it asks for no more subdivision.
+
+use crate::scale::RenderScale;
+use crate::worker::{FrameDone, FrameFailure, FrameJob, Picture, Stage, Worker};
+use fathom_core::Camera;
+use fathom_render::{Backend, CancelToken, RenderRequest, Stats};
+use std::hash::{Hash, Hasher};
+use std::time::Instant;
+
+/// A frame being rendered.
+struct InFlight {
+    id: u64,
+    key: u64,
+    stage: Stage,
+    cancel: CancelToken,
+    sent: Instant,
+}
+
+/// The frame on screen.
+pub struct Shown {
+    pub key: u64,
+    pub stage: Stage,
+    /// Its pixel size and the request it was rendered with.
+    pub request: RenderRequest,
+    pub stats: Stats,
+    /// The scene generation it shows.
+    pub generation: u64,
+    /// Render time of the frame, ms.
+    pub ms: f64,
+    /// Octree subdivisions still asked for, for stepped octree frames.
+    pub octree_requests: Option<u64>,
+}
+
+/// Frame scheduling and the texture on screen.
+pub struct Viewport {
+    pub scale: RenderScale,
+    /// Supersampling of the last refinement (1: stop at full resolution).
+    pub refine_supersample: u32,
+    in_flight: Option<InFlight>,
+    pub shown: Option<Shown>,
+    pub texture: Option<egui::TextureHandle>,
+    next_id: u64,
+    /// When the key last changed, and when the first full-resolution frame of that key arrived.
+    pub still_since: Option<Instant>,
+    pub full_after_still_ms: Option<f64>,
+    /// The last error a frame reported.
+    pub error: Option<String>,
+    /// The key whose stillness `still_since` times.
+    still_key: Option<u64>,
+}
+
+/// The view a frame is of: everything that changes its pixels.
+pub fn view_key(camera: &Camera, generation: u64, request: &RenderRequest) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    format!("{camera:?}").hash(&mut h);
+    generation.hash(&mut h);
+    // The size and supersampling are chosen per frame; the rest of the request is the view.
+    let r = RenderRequest {
+        width: 0,
+        height: 0,
+        supersample: 1,
+        ..request.clone()
+    };
+    serde_json::to_string(&r).unwrap_or_default().hash(&mut h);
+    h.finish()
+}
+
+impl Viewport {
+    pub fn new(target_ms: f64) -> Viewport {
+        Viewport {
+            scale: RenderScale::new(target_ms),
+            refine_supersample: 2,
+            in_flight: None,
+            shown: None,
+            texture: None,
+            next_id: 0,
+            still_since: None,
+            full_after_still_ms: None,
+            error: None,
+            still_key: None,
+        }
+    }
+
+    /// Whether the frame on screen is the final refinement of `key` (nothing more to do).
+    pub fn settled(&self, key: u64) -> bool {
+        self.in_flight.is_none()
+            && self.shown.as_ref().is_some_and(|s| {
+                s.key == key
+                    && match s.octree_requests {
+                        Some(r) => r == 0,
+                        None => s.stage == self.last_stage(),
+                    }
+            })
+    }
+
+    fn last_stage(&self) -> Stage {
+        if self.refine_supersample > 1 {
+            Stage::Supersampled
+        } else {
+            Stage::Full
+        }
+    }
+
+    /// Takes a finished frame: shows it if it is the one asked for. Returns its picture's
+    /// image to upload, if shown.
+    pub fn accept(&mut self, done: FrameDone) -> Option<egui::ColorImage> {
+        let current = self.in_flight.as_ref().is_some_and(|f| f.id == done.id);
+        if current {
+            self.in_flight = None;
+        }
+        match done.result {
+            Ok(Picture { image, stats }) => {
+                if done.stage == Stage::Interactive && done.request.backend != Backend::Octree {
+                    self.scale.update(done.scale, done.ms);
+                }
+                if done.stage >= Stage::Full
+                    && self.full_after_still_ms.is_none()
+                    && let Some(t) = self.still_since
+                {
+                    self.full_after_still_ms = Some(t.elapsed().as_secs_f64() * 1e3);
+                }
+                self.error = None;
+                self.shown = Some(Shown {
+                    key: done.key,
+                    stage: done.stage,
+                    request: done.request,
+                    stats,
+                    generation: done.generation,
+                    ms: done.ms,
+                    octree_requests: done.octree_requests,
+                });
+                Some(image)
+            }
+            Err(FrameFailure::Cancelled) => None,
+            Err(FrameFailure::Error(e)) => {
+                self.error = Some(e);
+                // Do not retry the same view in a loop: mark it shown at its final stage.
+                if let Some(s) = &mut self.shown {
+                    s.key = done.key;
+                    s.stage = Stage::Supersampled;
+                    s.octree_requests = Some(0);
+                }
+                None
+            }
+        }
+    }
+
+    /// Decides the next job for the view `key` of `camera` in a `w` x `h` viewport with the
+    /// settings of `base` (whose size is ignored), and sends it. Call once per window frame.
+    pub fn schedule(
+        &mut self,
+        worker: &Worker,
+        key: u64,
+        camera: &Camera,
+        base: &RenderRequest,
+        (w, h): (u32, u32),
+    ) {
+        if w == 0 || h == 0 {
+            return; // minimised or collapsed: nothing to draw
+        }
+        if self.shown.as_ref().is_none_or(|s| s.key != key)
+            && self.in_flight.as_ref().is_none_or(|f| f.key != key)
+        {
+            // The view changed: restart the clock of "time to full resolution".
+            if self.still_key != Some(key) {
+                self.still_key = Some(key);
+                self.still_since = Some(Instant::now());
+                self.full_after_still_ms = None;
+            }
+        }
+        if let Some(f) = &self.in_flight {
+            let stale = f.key != key;
+            let overdue = f.sent.elapsed().as_secs_f64() * 1e3 > 2.0 * self.scale.target_ms();
+            if stale && (f.stage != Stage::Interactive || overdue) {
+                f.cancel.cancel();
+                self.in_flight = None;
+            } else {
+                return;
+            }
+        }
+        let octree = base.backend == Backend::Octree;
+        let stage = match &self.shown {
+            Some(s) if s.key == key => {
+                if octree {
+                    if s.octree_requests == Some(0) {
+                        return;
+                    }
+                    Stage::Interactive
+                } else if s.stage == Stage::Interactive {
+                    Stage::Full
+                } else if s.stage == Stage::Full && self.refine_supersample > 1 {
+                    Stage::Supersampled
+                } else {
+                    return;
+                }
+            }
+            _ => Stage::Interactive,
+        };
+        let (fw, fh, ss, scale) = match stage {
+            _ if octree => (w, h, 1, 1.0),
+            Stage::Interactive => {
+                let s = self.scale.scale();
+                let (sw, sh) = RenderScale::size(w, h, s);
+                (sw, sh, 1, s)
+            }
+            Stage::Full => (w, h, 1, 1.0),
+            Stage::Supersampled => (w, h, self.refine_supersample, 1.0),
+        };
+        // Stereo: the viewport shows the whole layout; each eye gets its share.
+        let (fw, fh) = match base.projection {
+            fathom_core::Projection::Mono => (fw, fh),
+            fathom_core::Projection::SideBySide { .. } => ((fw / 2).max(1), fh),
+            fathom_core::Projection::Ods { .. } => (fw, (fh / 2).max(1)),
+        };
+        let request = RenderRequest {
+            width: fw,
+            height: fh,
+            supersample: ss,
+            region: None,
+            ..base.clone()
+        };
+        self.next_id += 1;
+        let cancel = CancelToken::new();
+        worker.render(FrameJob {
+            id: self.next_id,
+            stage,
+            key,
+            camera: camera.clone(),
+            request,
+            cancel: cancel.clone(),
+            octree_step: octree,
+            scale,
+        });
+        self.in_flight = Some(InFlight {
+            id: self.next_id,
+            key,
+            stage,
+            cancel,
+            sent: Instant::now(),
+        });
+    }
+
+    /// Whether a frame is being rendered.
+    pub fn busy(&self) -> bool {
+        self.in_flight.is_some()
+    }
+}

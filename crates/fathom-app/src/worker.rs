@@ -1,0 +1,264 @@
+//! The render worker: a thread that owns the render [`Session`], so the window's thread never
+//! waits on a render. The window sends it scene edits and frame jobs; it renders the newest job
+//! (older queued jobs are dropped unrendered), applies the newest scene first (an edit reaches
+//! the next frame through `Session::set_scene`: a parameter-buffer update, or a recompile for a
+//! structure edit), converts the frame to an image the window uploads as is, and wakes the
+//! window. Each job carries its own [`CancelToken`]: the window cancels a job that went stale
+//! without any risk of cancelling the next one.
+
+use fathom_core::{Camera, Scene};
+use fathom_render::{
+    Backend, CancelToken, Control, Counters, RenderError, RenderRequest, SceneChange, Session,
+    Stats,
+};
+use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
+use std::time::Instant;
+
+/// How refined a frame is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    /// Reduced resolution while the view moves.
+    Interactive,
+    /// Full resolution.
+    Full,
+    /// Full resolution, supersampled.
+    Supersampled,
+}
+
+/// One frame to render.
+#[derive(Clone)]
+pub struct FrameJob {
+    pub id: u64,
+    pub stage: Stage,
+    /// The view this frame is of (camera, scene, settings, size), to tell stale frames.
+    pub key: u64,
+    pub camera: Camera,
+    pub request: RenderRequest,
+    pub cancel: CancelToken,
+    /// Step the octree (render, then subdivide within its time budget) instead of settling it.
+    pub octree_step: bool,
+    /// The fraction of the viewport's resolution this frame renders at.
+    pub scale: f64,
+}
+
+/// What the worker sends back for a job.
+pub struct FrameDone {
+    pub id: u64,
+    pub stage: Stage,
+    pub key: u64,
+    /// The scene generation the frame shows.
+    pub generation: u64,
+    pub request: RenderRequest,
+    pub result: Result<Picture, FrameFailure>,
+    /// Wall time of the render, conversion included.
+    pub ms: f64,
+    /// The job's resolution scale.
+    pub scale: f64,
+    pub counters: Counters,
+    /// Subdivisions the octree still asked for (stepped octree frames), so the window keeps
+    /// stepping a still view until it has settled.
+    pub octree_requests: Option<u64>,
+}
+
+/// A finished frame as the window shows it.
+pub struct Picture {
+    /// 8-bit sRGB RGBA, ready to upload.
+    pub image: egui::ColorImage,
+    pub stats: Stats,
+}
+
+/// Why a job produced no picture.
+#[derive(Debug)]
+pub enum FrameFailure {
+    Cancelled,
+    Error(String),
+}
+
+/// Scene edits the worker applied (or refused), reported once each.
+pub struct SceneApplied {
+    pub generation: u64,
+    pub result: Result<SceneChange, String>,
+    /// When the window sent the edit, to measure its latency to the screen.
+    pub sent: Instant,
+}
+
+/// From the worker.
+pub enum Reply {
+    Frame(Box<FrameDone>),
+    Scene(SceneApplied),
+}
+
+enum Msg {
+    Scene {
+        generation: u64,
+        scene: Box<Scene>,
+        sent: Instant,
+    },
+    Frame(Box<FrameJob>),
+    Gpu(Box<fathom_gpu::Renderer>),
+}
+
+/// The window's side of the worker.
+pub struct Worker {
+    tx: Sender<Msg>,
+    rx: Receiver<Reply>,
+}
+
+impl Worker {
+    /// Starts a worker on a session of `scene` (which must validate). `wake` is called after
+    /// every reply (the window passes `egui::Context::request_repaint`).
+    pub fn start(scene: Scene, wake: impl Fn() + Send + 'static) -> Result<Worker, RenderError> {
+        let session = Session::new(scene)?;
+        let (tx, worker_rx) = channel::<Msg>();
+        let (worker_tx, rx) = channel::<Reply>();
+        std::thread::Builder::new()
+            .name("fathom render worker".into())
+            .spawn(move || run(session, worker_rx, worker_tx, wake))
+            .map_err(|e| RenderError::Threads {
+                threads: 1,
+                message: e.to_string(),
+            })?;
+        Ok(Worker { tx, rx })
+    }
+
+    /// Sends an edited scene (generation `generation`).
+    pub fn set_scene(&self, generation: u64, scene: Scene) {
+        let _ = self.tx.send(Msg::Scene {
+            generation,
+            scene: Box::new(scene),
+            sent: Instant::now(),
+        });
+    }
+
+    /// Queues a frame.
+    pub fn render(&self, job: FrameJob) {
+        let _ = self.tx.send(Msg::Frame(Box::new(job)));
+    }
+
+    /// Gives the session a GPU renderer (on the window's device).
+    pub fn set_gpu(&self, r: fathom_gpu::Renderer) {
+        let _ = self.tx.send(Msg::Gpu(Box::new(r)));
+    }
+
+    /// Replies so far, without waiting.
+    pub fn poll(&self) -> Vec<Reply> {
+        self.rx.try_iter().collect()
+    }
+}
+
+fn run(mut session: Session, rx: Receiver<Msg>, tx: Sender<Reply>, wake: impl Fn()) {
+    let mut generation = 0;
+    let mut pending: Vec<Msg> = Vec::new();
+    loop {
+        if pending.is_empty() {
+            match rx.recv() {
+                Ok(m) => pending.push(m),
+                Err(_) => return, // the window is gone
+            }
+        }
+        loop {
+            match rx.try_recv() {
+                Ok(m) => pending.push(m),
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return,
+            }
+        }
+        // The newest scene and the newest frame; GPU renderers in order.
+        let mut scene = None;
+        let mut frame = None;
+        for m in pending.drain(..) {
+            match m {
+                Msg::Scene {
+                    generation: g,
+                    scene: s,
+                    sent,
+                } => scene = Some((g, s, sent)),
+                Msg::Frame(j) => frame = Some(j),
+                Msg::Gpu(r) => session.set_gpu(*r),
+            }
+        }
+        if let Some((g, s, sent)) = scene {
+            let result = session.set_scene(*s).map_err(|e| e.to_string());
+            if result.is_ok() {
+                generation = g;
+            }
+            let _ = tx.send(Reply::Scene(SceneApplied {
+                generation: g,
+                result,
+                sent,
+            }));
+            wake();
+        }
+        if let Some(job) = frame {
+            let done = render(&mut session, &job, generation);
+            if tx.send(Reply::Frame(Box::new(done))).is_err() {
+                return;
+            }
+            wake();
+        }
+    }
+}
+
+fn render(session: &mut Session, job: &FrameJob, generation: u64) -> FrameDone {
+    let start = Instant::now();
+    let control = Control {
+        cancel: Some(&job.cancel),
+        progress: None,
+    };
+    let mut octree_requests = None;
+    let result = if job.cancel.is_cancelled() {
+        Err(FrameFailure::Cancelled)
+    } else if job.octree_step && job.request.backend == Backend::Octree {
+        match session.step_octree(&job.camera, &job.request, true) {
+            Ok((Some(frame), st)) => {
+                octree_requests = Some(st.requests);
+                let mut stats = Stats {
+                    renderer: "svo",
+                    width: frame.width,
+                    height: frame.height,
+                    primary_rays: st.rays,
+                    hits: st.hits,
+                    ..Stats::default()
+                };
+                stats.ms.trace_and_shade = st.render_ms;
+                stats.ms.subdivide = Some(st.subdivide_ms);
+                stats.octree = Some(fathom_render::stats::OctreeStats {
+                    settle_frames: 0,
+                    nodes: st.node_count,
+                    bricks: st.brick_count,
+                    nodes_per_ray: st.nodes_per_ray,
+                    arena_bytes: st.arena_bytes,
+                });
+                Ok(picture(&frame, stats))
+            }
+            Ok((None, _)) => Err(FrameFailure::Error("the octree returned no frame".into())),
+            Err(e) => Err(FrameFailure::Error(e.to_string())),
+        }
+    } else {
+        match session.render_with(&job.camera, &job.request, &control) {
+            Ok(r) => Ok(picture(&r.frame, r.stats)),
+            Err(RenderError::Cancelled) => Err(FrameFailure::Cancelled),
+            Err(e) => Err(FrameFailure::Error(e.to_string())),
+        }
+    };
+    FrameDone {
+        id: job.id,
+        stage: job.stage,
+        key: job.key,
+        generation,
+        request: job.request.clone(),
+        result,
+        ms: start.elapsed().as_secs_f64() * 1e3,
+        scale: job.scale,
+        counters: session.counters(),
+        octree_requests,
+    }
+}
+
+/// The frame as an sRGB image (tonemapped as the PNG output is).
+fn picture(frame: &fathom_core::frame::Frame, stats: Stats) -> Picture {
+    let rgb = fathom_trace::post::to_rgb8(frame);
+    let image = egui::ColorImage::from_rgb([frame.width as usize, frame.height as usize], &rgb);
+    Picture { image, stats }
+}
