@@ -77,7 +77,7 @@ impl<'a> Culler<'a> {
     /// Descends to `stop` for the slab of layer `z`; returns the survivors at `stop`.
     pub fn descend(&mut self, z: u32, stop: u32) -> Vec<[u32; 3]> {
         for level in (stop..=self.top).rev() {
-            if z % (1 << level) != 0 {
+            if !z.is_multiple_of(1 << level) {
                 continue; // still inside this level's slab: its survivors stand
             }
             let zl = z >> level;

@@ -144,7 +144,7 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
         u => return Err(format!("`{s}`: unknown unit `{u}` (valid: B, K, M, G, T)")),
     };
     let bytes = v * mul as f64;
-    if !(bytes.is_finite() && bytes >= 1.0 && bytes < 1.8e19) {
+    if !(bytes.is_finite() && (1.0..1.8e19).contains(&bytes)) {
         return Err(format!("`{s}` is out of range [1 B, 16 EiB]"));
     }
     Ok(bytes as u64)

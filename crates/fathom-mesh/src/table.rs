@@ -87,8 +87,8 @@ fn build_case(mask: usize) -> Case {
             let mut segs: Vec<(u8, u8)> = Vec::new();
             if count == 2 && ins[0] == ins[2] {
                 // Ambiguous: cut off each inside corner.
-                for i in 0..4 {
-                    if ins[i] {
+                for (i, &inside) in ins.iter().enumerate() {
+                    if inside {
                         // Corner f[i] is between face edges i-1 and i.
                         segs.push(cut(i, true, &fe));
                     }

@@ -363,7 +363,7 @@ pub fn save_camera_path(
     while text.len() % 4 != 0 {
         text.push(' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + text.len() + 8 + bin.len();

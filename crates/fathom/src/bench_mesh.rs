@@ -64,7 +64,7 @@ struct Probe<'a> {
 impl MeshSink for Probe<'_> {
     fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError> {
         for x in v {
-            if self.seen % 61 == 0 {
+            if self.seen.is_multiple_of(61) {
                 let p = x.p.map(|c| c as f64);
                 let d = self.ev.distance(self.tape, V3::new(p[0], p[1], p[2])).abs();
                 self.worst = self.worst.max(d);

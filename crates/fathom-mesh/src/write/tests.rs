@@ -78,11 +78,8 @@ fn stl_reads_back_with_stl_io() {
     let stl = stl_io::read_stl(&mut f).unwrap();
     assert_eq!(stl.faces.len(), m.tris.len());
     for (face, want) in stl.faces.iter().zip(&m.tris).step_by(53) {
-        for k in 0..3 {
-            assert_eq!(
-                stl.vertices[face.vertices[k]].0,
-                m.verts[want[k] as usize].p
-            );
+        for (&got, &w) in face.vertices.iter().zip(want) {
+            assert_eq!(stl.vertices[got].0, m.verts[w as usize].p);
         }
     }
     std::fs::remove_dir_all(&d).ok();
