@@ -97,14 +97,15 @@ pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<()
 }
 
 /// The tonemapped, gamma-encoded colour image as a 16-bit PNG (the same curve as the 8-bit
-/// one, without its banding in dark gradients).
+/// one, without its banding in dark gradients). The encoder takes 16-bit samples in native byte
+/// order and writes them big-endian as PNG requires.
 pub fn save_colour16(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
     use image::ImageEncoder;
     let data: Vec<u8> = frame
         .colour
         .iter()
         .flat_map(|c| c.map(|v| (post::srgb(post::tonemap(v)) * 65535.0 + 0.5) as u16))
-        .flat_map(u16::to_be_bytes)
+        .flat_map(u16::to_ne_bytes)
         .collect();
     let enc = image::codecs::png::PngEncoder::new(BufWriter::new(file));
     enc.write_image(
