@@ -44,13 +44,79 @@ fn is_zero(x: &f64) -> bool {
     *x == 0.0
 }
 
-/// A modulation source.
+/// A modulation source. Written `Lfo(wave: Sine, rate: 0.5)` or `Osc(address: "/a")` in scene
+/// files (see [`SourceText`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "SourceText", into = "SourceText")]
 pub enum Source {
     /// A low-frequency oscillator.
     Lfo(Lfo),
     /// The value of an OSC message arriving over UDP.
     Osc(OscInput),
+}
+
+/// How a [`Source`] is written: struct variants, so a file says `Lfo(wave: Sine, rate: 0.5)`
+/// rather than `Lfo((wave: Sine, rate: 0.5))`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum SourceText {
+    Lfo {
+        wave: Wave,
+        rate: f64,
+        #[serde(default, skip_serializing_if = "is_zero")]
+        phase: f64,
+        #[serde(default = "one")]
+        depth: f64,
+        #[serde(default, skip_serializing_if = "is_zero_u32")]
+        seed: u32,
+    },
+    Osc {
+        address: String,
+        #[serde(default, skip_serializing_if = "is_zero_usize")]
+        arg: usize,
+        #[serde(default = "unit_range")]
+        from: (f64, f64),
+    },
+}
+
+impl From<SourceText> for Source {
+    fn from(t: SourceText) -> Source {
+        match t {
+            SourceText::Lfo {
+                wave,
+                rate,
+                phase,
+                depth,
+                seed,
+            } => Source::Lfo(Lfo {
+                wave,
+                rate,
+                phase,
+                depth,
+                seed,
+            }),
+            SourceText::Osc { address, arg, from } => Source::Osc(OscInput { address, arg, from }),
+        }
+    }
+}
+
+impl From<Source> for SourceText {
+    fn from(s: Source) -> SourceText {
+        match s {
+            Source::Lfo(l) => SourceText::Lfo {
+                wave: l.wave,
+                rate: l.rate,
+                phase: l.phase,
+                depth: l.depth,
+                seed: l.seed,
+            },
+            Source::Osc(o) => SourceText::Osc {
+                address: o.address,
+                arg: o.arg,
+                from: o.from,
+            },
+        }
+    }
 }
 
 /// LFO waveforms. Each starts at its middle at phase 0 and rises (the noise aside).

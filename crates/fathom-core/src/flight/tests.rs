@@ -314,3 +314,22 @@ fn bad_paths_and_bindings_are_located_errors() {
             .contains("did you mean `tour`")
     );
 }
+
+#[test]
+fn the_example_dive_parses_and_stays_outside_the_bulb() {
+    let text = include_str!("../../../../docs/examples/mandelbulb-dive.ron");
+    let scene = scene_file::parse(text, "mandelbulb-dive.ron").unwrap();
+    let tape = Tape::compile(&scene).unwrap();
+    let f = scene
+        .path("dive")
+        .unwrap()
+        .prepare(&scene, Some(&tape))
+        .unwrap();
+    assert_eq!(f.params(), ["root.material.trap_colour"]);
+    for i in 0..=120 {
+        let t = f.duration() * i as f64 / 120.0;
+        let eye = f.sample(t).camera.eye;
+        let d = tape.eval_f64([eye.x, eye.y, eye.z]).d;
+        assert!(d > 0.0, "t {t}: the eye is inside (estimate {d:e})");
+    }
+}
