@@ -13,6 +13,9 @@ done
 # Mandelbulber2: its shipped example .fract files are the import tests' input (and
 # scripts/mandelbulber-masks.sh renders the golden silhouettes with it).
 have mandelbulber2 || need+=(mandelbulber2)
+# ffmpeg: `fathom render --path` makes a video of a flight path's frames with it, and a test
+# (crates/fathom/src/cmd_flight.rs) makes one.
+have ffmpeg || need+=(ffmpeg)
 # (window tests add their packages here: xvfb ...)
 
 if [ ${#need[@]} -gt 0 ]; then

@@ -1,11 +1,12 @@
 //! Camera paths over a number of frames, for every renderer: a zoom into a point (the eye's
 //! distance to it shrinks geometrically, so each frame zooms by the same factor) and a tour
-//! (a Catmull-Rom spline through eye and look-at waypoints); and how to find the point to zoom
+//! (a [`crate::flight`] path through eye and look-at waypoints); and how to find the point to zoom
 //! into: the surface point of a view, bracketed to f64 precision. [`path_preset`] pairs scenes
 //! with paths (the zooms and the tour of `fathom zoom`).
 
 use crate::camera::Camera;
 use crate::eval::Evaluator;
+use crate::flight::{FlightPath, Keyframe};
 use crate::presets::{self, PresetError};
 use crate::scene::Scene;
 use crate::scenes;
@@ -25,7 +26,7 @@ pub enum CameraPath {
         /// Eye distance at frame 0.
         start: f64,
     },
-    /// Catmull-Rom through (eye, target) waypoints (at least two).
+    /// A flight through (eye, target) waypoints (at least two), at constant speed.
     Tour {
         /// Waypoints: eye and look-at point.
         points: Vec<(DVec3, DVec3)>,
@@ -56,7 +57,7 @@ impl CameraPath {
             CameraPath::Zoom { target, dir, start } => {
                 (*target + *dir * (start * depth.powf(-f)), *target)
             }
-            CameraPath::Tour { points } => catmull_rom(points, f),
+            CameraPath::Tour { points } => tour_point(points, f),
         };
         let fwd = (target - eye).normalize();
         let up = if fwd.cross(DVec3::Y).length() > 1e-3 {
@@ -182,29 +183,45 @@ pub fn path_preset(name: &str) -> Result<PathPreset, PresetError> {
     }
 }
 
-/// Uniform Catmull-Rom through the waypoints at parameter `f` in [0, 1] (end points repeated).
-fn catmull_rom(p: &[(DVec3, DVec3)], f: f64) -> (DVec3, DVec3) {
+/// The tour through `(eye, target)` waypoints at `f` in [0, 1]: a [`FlightPath`] through them
+/// (centripetal Catmull-Rom, squad orientations, paced by distance and angle: the tour's
+/// waypoints carry no scale), so tours and scene-file paths share one spline.
+fn tour_point(p: &[(DVec3, DVec3)], f: f64) -> (DVec3, DVec3) {
     if p.len() < 2 {
         return p.first().copied().unwrap_or((DVec3::Z, DVec3::ZERO));
     }
-    let n = p.len() - 1;
-    let x = f.clamp(0.0, 1.0) * n as f64;
-    let i = (x.floor() as usize).min(n - 1);
-    let u = x - i as f64;
-    let g = |k: isize| p[k.clamp(0, n as isize) as usize];
-    let (a, b, c, d) = (
-        g(i as isize - 1),
-        g(i as isize),
-        g(i as isize + 1),
-        g(i as isize + 2),
-    );
-    let cr = |a: DVec3, b: DVec3, c: DVec3, d: DVec3| {
-        0.5 * (2.0 * b
-            + (c - a) * u
-            + (2.0 * a - 5.0 * b + 4.0 * c - d) * u * u
-            + (3.0 * b - a - 3.0 * c + d) * u * u * u)
+    let keys = p
+        .iter()
+        .map(|&(eye, target)| {
+            let fwd = target - eye;
+            let up = if fwd.cross(DVec3::Y).length() > 1e-3 * fwd.length() {
+                DVec3::Y
+            } else {
+                DVec3::X
+            };
+            Keyframe {
+                up,
+                ..Keyframe::from_camera(&Camera {
+                    eye,
+                    target,
+                    up,
+                    fov: 45.0,
+                })
+            }
+        })
+        .collect();
+    let path = FlightPath {
+        scale_aware: false,
+        ..FlightPath::new("tour", 1.0, keys)
     };
-    (cr(a.0, b.0, c.0, d.0), cr(a.1, b.1, c.1, d.1))
+    match path.prepare(&crate::scenes::sphere(1.0), None) {
+        Ok(flight) => {
+            let c = flight.sample(f).camera;
+            (c.eye, c.target)
+        }
+        // Coinciding eye and target: no orientation to interpolate; stay at the first.
+        Err(_) => p[0],
+    }
 }
 
 /// The zoom target of a scene's view (it follows the camera, so a preset that is reframed keeps

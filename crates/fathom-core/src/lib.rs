@@ -4,21 +4,26 @@
 //! - [`primitives`], [`fractals`], [`transforms`], [`modifiers`], [`combine`]: the declarations;
 //! - [`scene`]: the scene tree, camera, lights, render settings; [`scenes`]: code-built ones;
 //! - [`camera`]: the camera and its projections; [`camera_path`]: zooms and tours over frames;
+//! - [`flight`]: named flight paths (keyframes, splines, scale-aware timing);
+//!   [`binding`]: parameters driven by LFOs or OSC; [`param_path`]: a number of a scene by path;
 //! - [`tape`]: the flat program a scene compiles to (see `docs/tape.md`);
 //! - [`eval`]: the CPU interpreter (f64 scalar and f32x8 packet paths) and normals;
 //! - [`reference`]: a direct tree walk that defines what the tape must compute;
 //! - [`shared`]: constants the CPU renderers and the WGSL program share, defined once.
 
+pub mod binding;
 pub mod call_serde;
 pub mod camera;
 pub mod camera_path;
 pub mod combine;
 pub mod docgen;
 pub mod eval;
+pub mod flight;
 pub mod fractals;
 pub mod frame;
 pub mod limits;
 pub mod modifiers;
+pub mod param_path;
 pub mod presets;
 pub mod primitives;
 pub mod real;

@@ -1,7 +1,8 @@
 //! The scene model: a tree of nodes in which every node is a shape (primitive or fractal), the
 //! edge to its parent is a combine operator, and each node carries its own ordered list of
 //! domain operators and a material. The root may carry an IFS loop. A scene also holds the
-//! camera, the lights and the render settings.
+//! camera, the lights and the render settings, and for animation its flight paths and
+//! modulation bindings.
 //!
 //! Semantics (the tape compiler and the reference evaluator both follow them):
 //! - a node's point operators (`Transform`s) apply, in list order, to the node's shape and to
@@ -12,8 +13,10 @@
 //!   value of the subtree;
 //! - the IFS loop runs `iterations` times over its operators before the root is evaluated.
 
+use crate::binding::Binding;
 use crate::camera::Camera;
 use crate::combine::Combine;
+use crate::flight::FlightPath;
 use crate::fractals::Fractal;
 use crate::modifiers::Modifier;
 use crate::primitives::Primitive;
@@ -359,6 +362,12 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ifs: Option<Ifs>,
     pub root: Node,
+    /// Named camera paths ([`crate::flight`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub paths: Vec<FlightPath>,
+    /// Parameters driven by LFOs or OSC ([`crate::binding`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bindings: Vec<Binding>,
 }
 
 fn default_lights() -> Vec<Light> {
@@ -375,9 +384,12 @@ impl Scene {
             render: RenderSettings::default(),
             ifs: None,
             root,
+            paths: Vec::new(),
+            bindings: Vec::new(),
         }
     }
 }
 
+pub mod fields;
 mod validate;
 pub use validate::SceneError;

@@ -85,16 +85,19 @@ pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneFileError> {
         syntax(pos, msg)
     })?;
     // Rule violations name a node path; point at it in the text when it is written there.
-    scene.validate().map_err(|error| {
-        let msg = error.to_string();
-        match lex::locate_path(&tokens, &msg) {
-            Some(pos) => syntax(pos, msg),
-            None => SceneFileError::Invalid {
-                origin: origin.into(),
-                error,
-            },
-        }
-    })?;
+    scene
+        .validate()
+        .and_then(|()| scene.validate_animation())
+        .map_err(|error| {
+            let msg = error.to_string();
+            match lex::locate_path(&tokens, &msg) {
+                Some(pos) => syntax(pos, msg),
+                None => SceneFileError::Invalid {
+                    origin: origin.into(),
+                    error,
+                },
+            }
+        })?;
     Ok(scene)
 }
 

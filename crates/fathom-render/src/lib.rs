@@ -10,6 +10,7 @@
 //! - [`control`]: cancellation ([`CancelToken`], checked between tiles) and progress;
 //! - [`stats`]: [`Stats`], one statistics type serialised with the same keys for every backend;
 //! - [`zoom`]: the octree's zoom loop with its precision guard;
+//! - [`flight`]: a scene's flight path rendered frame by frame (`fathom render --path`);
 //! - `gpu`, `octree`: the two backends with state of their own.
 //!
 //! Regions (a rectangle of a larger image): the CPU tracer renders only the tiles a region
@@ -19,6 +20,7 @@
 
 pub mod control;
 pub mod error;
+pub mod flight;
 mod gpu;
 mod octree;
 pub mod request;

@@ -15,6 +15,9 @@ enum BenchKind {
     Eval(crate::bench_eval::EvalArgs),
     /// GPU renderer vs CPU tracer per preset: ms per frame and evaluations per pixel.
     Gpu(crate::bench_gpu::GpuArgs),
+    /// Live modulation: latency from an OSC packet to the frame that shows it, p99 frame time
+    /// during an OSC flood against a quiet run, and fps of `fathom render --path`.
+    Live(crate::bench_live::LiveBenchArgs),
     /// Microgeometry demos on the CPU and GPU renderers, and baked-grid error and memory.
     Micro(crate::bench_micro::MicroBenchArgs),
     /// Streaming mesher: triangles/s, peak RSS and surface error for Menger and Mandelbulb,
@@ -34,6 +37,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
         BenchKind::Gpu(g) => crate::bench_gpu::run(g),
+        BenchKind::Live(l) => crate::bench_live::run(l),
         BenchKind::Micro(m) => crate::bench_micro::run(m),
         BenchKind::Mesh(m) => crate::bench_mesh::run(m),
         BenchKind::Svo(s) => crate::bench_svo::run(s),

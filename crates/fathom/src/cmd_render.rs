@@ -33,6 +33,7 @@ pub enum TracerKind {
 ///   fathom render --preset mandelbulb --gpu -o gpu.png
 ///   fathom render --preset mandelbulb --gpu --stereo ods --size 2048x1024 -o vr.png
 ///   fathom render --preset menger --stereo sbs --size 640x480 -o pair.png
+///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 -o dive/
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct RenderArgs {
@@ -105,6 +106,20 @@ pub struct RenderArgs {
     /// at this view).
     #[arg(long, value_enum, default_value = "trace")]
     pub renderer: RendererKind,
+    /// Fly the scene's flight path NAME (see docs/scene-format.md) and write --frames frames:
+    /// -o is a directory (frames DIR/NAME-00000.png, and DIR/NAME.mp4 when ffmpeg is on PATH)
+    /// or a pattern such as shots/f-####.png.
+    #[arg(long, requires = "frames")]
+    pub path: Option<String>,
+    /// Frames of the path to render, [1, 1000000]; the first at its start, the last at its end.
+    #[arg(long, requires = "path")]
+    pub frames: Option<usize>,
+    /// Frame rate of the video made from a path's frames.
+    #[arg(long, default_value_t = 24.0)]
+    pub fps: f64,
+    /// Do not make a video from a path's frames even when ffmpeg is on PATH.
+    #[arg(long)]
+    pub no_video: bool,
 }
 
 /// Which renderer `fathom render` uses.
@@ -246,6 +261,10 @@ fn progress_bar(quiet: bool) -> Result<indicatif::ProgressBar, String> {
 }
 
 pub fn run(a: RenderArgs) -> Result<(), String> {
+    if a.path.is_some() {
+        let scene = load_scene(&a)?;
+        return crate::cmd_flight::run(&a, scene);
+    }
     let req = a.request()?;
     let scene = load_scene(&a)?;
     // Open every output before rendering, so a bad path fails fast.

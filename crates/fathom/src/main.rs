@@ -13,16 +13,19 @@ mod args;
 mod bench;
 mod bench_eval;
 mod bench_gpu;
+mod bench_live;
 mod bench_mesh;
 mod bench_micro;
 mod bench_svo;
 mod bench_trace;
 mod bench_volume;
 mod cmd_explore;
+mod cmd_flight;
 mod cmd_import;
 mod cmd_list;
 mod cmd_mesh;
 mod cmd_micro;
+mod cmd_osc;
 mod cmd_render;
 mod cmd_scene;
 mod cmd_volume;
@@ -63,6 +66,8 @@ enum Command {
     /// Run a benchmark and print JSON.
     Bench(bench::BenchArgs),
     Volume(Box<cmd_volume::VolumeArgs>),
+    OscSend(cmd_osc::OscSendArgs),
+    OscMonitor(cmd_osc::OscMonitorArgs),
 }
 
 /// The arguments of a command given no flags, from its clap declarations (every flag has a
@@ -91,6 +96,8 @@ fn main() -> ExitCode {
         Some(Command::Explore(a)) => cmd_explore::run(a),
         Some(Command::Bench(a)) => bench::run(a),
         Some(Command::Volume(a)) => cmd_volume::run(*a),
+        Some(Command::OscSend(a)) => cmd_osc::send(a),
+        Some(Command::OscMonitor(a)) => cmd_osc::monitor(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -111,7 +118,17 @@ mod tests {
         let mut cli = Cli::command();
         cli.build();
         for name in [
-            "render", "zoom", "explore", "list", "scene", "volume", "micro", "mesh", "import",
+            "render",
+            "zoom",
+            "explore",
+            "list",
+            "scene",
+            "volume",
+            "micro",
+            "mesh",
+            "import",
+            "osc-send",
+            "osc-monitor",
         ] {
             let sub = cli.find_subcommand_mut(name).unwrap();
             let help = sub.render_long_help().to_string();

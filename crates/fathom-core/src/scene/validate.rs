@@ -3,6 +3,7 @@
 //! names the node (its path in the tree) or setting that failed, so a GUI can point at it and
 //! the command line prints it as text.
 
+use super::fields::{LIGHT_FIELDS, MATERIAL_FIELDS, RENDER_FIELDS};
 use super::{Node, SCENE_VERSION, Scene};
 use crate::camera::CameraError;
 use crate::limits;
@@ -40,6 +41,18 @@ pub enum SceneError {
         "lights[{index}]: direction must be finite and non-zero, colour and intensity in [0, 1000]"
     )]
     Light { index: usize },
+    /// A flight path breaks a rule; `path` says where (`paths[0].keys[2].fov`).
+    #[error("{path}: {error}")]
+    Flight {
+        path: String,
+        error: crate::flight::FlightError,
+    },
+    /// A modulation binding breaks a rule; `path` says where (`bindings[1].param`).
+    #[error("{path}: {error}")]
+    Binding {
+        path: String,
+        error: crate::binding::BindingError,
+    },
     /// A render setting out of its range (`name` is the field of `render`).
     #[error("render.{name} = {value} is out of range [{min}, {max}]")]
     Render {
@@ -56,7 +69,9 @@ impl SceneError {
         match self {
             SceneError::TooManyOps { path, .. }
             | SceneError::Entry { path, .. }
-            | SceneError::Material { path } => Some(path),
+            | SceneError::Material { path }
+            | SceneError::Flight { path, .. }
+            | SceneError::Binding { path, .. } => Some(path),
             _ => None,
         }
     }
@@ -105,13 +120,10 @@ impl Scene {
             });
         }
         for (index, l) in self.lights.iter().enumerate() {
-            let ok = l.direction.is_finite()
-                && l.direction.length_squared() > 0.0
-                && l.intensity.is_finite()
-                && (0.0..=1e3).contains(&l.intensity)
-                && l.colour
+            let ok = l.direction.length_squared() > 0.0
+                && LIGHT_FIELDS
                     .iter()
-                    .all(|c| c.is_finite() && (0.0..=1e3).contains(c));
+                    .all(|f| f.read(l).iter().all(|&x| f.accepts(x)));
             if !ok {
                 return Err(SceneError::Light { index });
             }
@@ -119,42 +131,29 @@ impl Scene {
         self.validate_render()
     }
 
+    /// Checks the flight paths and modulation bindings: the rules of [`crate::flight`] and
+    /// [`crate::binding`], and that every parameter path they name exists in this scene.
+    /// Separate from [`Scene::validate`], which is what rendering needs: an edited tree can
+    /// leave a binding stale without making the scene unrenderable. Scene files check both.
+    pub fn validate_animation(&self) -> Result<(), SceneError> {
+        crate::flight::validate_paths(self)
+            .map_err(|(path, error)| SceneError::Flight { path, error })?;
+        crate::binding::validate_bindings(self)
+            .map_err(|(path, error)| SceneError::Binding { path, error })
+    }
+
     fn validate_render(&self) -> Result<(), SceneError> {
-        let r = &self.render;
-        let ranged = |name: &'static str, value: f64, min: f64, max: f64| {
-            if value.is_finite() && (min..=max).contains(&value) {
-                Ok(())
-            } else {
-                Err(SceneError::Render {
-                    name,
+        for f in RENDER_FIELDS {
+            let (min, max) = f.range.unwrap_or((f64::MIN, f64::MAX));
+            if let Some(&value) = f.read(&self.render).iter().find(|&&x| !f.accepts(x)) {
+                return Err(SceneError::Render {
+                    name: f.name,
                     value,
                     min,
                     max,
-                })
-            }
-        };
-        for (name, c) in [("sky_top", r.sky_top), ("sky_bottom", r.sky_bottom)] {
-            for v in c {
-                ranged(name, v, 0.0, 1e3)?;
+                });
             }
         }
-        for row in r.palette {
-            for v in row {
-                ranged("palette", v, -1e3, 1e3)?;
-            }
-        }
-        ranged("ambient", r.ambient, 0.0, 1.0)?;
-        ranged("ao", r.ao, 0.0, 4.0)?;
-        ranged("shadow_softness", r.shadow_softness, 1.0, 256.0)?;
-        ranged("fog", r.fog, 0.0, 1e6)?;
-        ranged(
-            "max_steps",
-            r.max_steps as f64,
-            1.0,
-            limits::MAX_STEPS as f64,
-        )?;
-        ranged("max_distance", r.max_distance, 1e-9, 1e12)?;
-        ranged("pixel_epsilon", r.pixel_epsilon, 0.01, 16.0)?;
         Ok(())
     }
 }
@@ -175,17 +174,9 @@ fn validate_node(n: &Node, path: &str) -> Result<(), SceneError> {
     for (i, op) in n.ops.iter().enumerate() {
         op.check().map_err(|e| entry(&format!("ops[{i}]"), e))?;
     }
-    let m = &n.material;
-    let mat_ok = m
-        .albedo
+    let mat_ok = MATERIAL_FIELDS
         .iter()
-        .all(|c| c.is_finite() && (0.0..=1.0).contains(c))
-        && m.specular.is_finite()
-        && (0.0..=1.0).contains(&m.specular)
-        && m.shininess.is_finite()
-        && (1.0..=4096.0).contains(&m.shininess)
-        && m.trap_colour.is_finite()
-        && (0.0..=1.0).contains(&m.trap_colour);
+        .all(|f| f.read(&n.material).iter().all(|&x| f.accepts(x)));
     if !mat_ok {
         return Err(SceneError::Material { path: path.into() });
     }

@@ -1,0 +1,280 @@
+//! `fathom render --path NAME --frames N -o DIR/`: a scene's flight path to a numbered image
+//! sequence (and a video when ffmpeg is on PATH). The render layer's [`FlightRender`] runs the
+//! frame loop; this module loads the scene, prepares the path, names the files
+//! (`fathom_trace::output::sequence_path`), drives the progress bar and calls ffmpeg.
+
+use crate::cmd_render::RenderArgs;
+use fathom_core::scene::Scene;
+use fathom_live::Modulator;
+use fathom_render::flight::FlightRender;
+use fathom_render::{Control, Session};
+use fathom_trace::output;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// Where frame files go: a pattern with one run of `#` (see `output::sequence_path`).
+pub fn frame_pattern(output: &Path, path_name: &str) -> PathBuf {
+    let text = output.to_string_lossy();
+    let is_dir =
+        text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) || output.is_dir();
+    if is_dir {
+        output.join(format!("{}-#####.png", safe_name(path_name)))
+    } else {
+        output.to_path_buf()
+    }
+}
+
+/// A path name as a file name: letters, digits, `-` and `_`; anything else becomes `_`.
+fn safe_name(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-_".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// The ffmpeg input pattern (`%05d`) for files named by [`output::sequence_path`] from
+/// `pattern`.
+fn ffmpeg_input(pattern: &Path) -> PathBuf {
+    let text = pattern.to_string_lossy();
+    match (text.find('#'), text.rfind('#')) {
+        (Some(a), Some(b)) => format!("{}%0{}d{}", &text[..a], b - a + 1, &text[b + 1..]).into(),
+        _ => {
+            // No `#`: sequence_path appends -NNNN before the extension.
+            let stem = pattern.file_stem().unwrap_or_default().to_string_lossy();
+            let name = match pattern.extension() {
+                Some(e) => format!("{stem}-%04d.{}", e.to_string_lossy()),
+                None => format!("{stem}-%04d"),
+            };
+            pattern.with_file_name(name)
+        }
+    }
+}
+
+/// Whether `ffmpeg` runs.
+pub fn ffmpeg_available() -> bool {
+    Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// Encodes the frames named by `pattern` into an H.264 MP4 at `fps`.
+pub fn encode_video(pattern: &Path, fps: f64, video: &Path) -> Result<(), String> {
+    let out = Command::new("ffmpeg")
+        .args(["-y", "-loglevel", "error", "-framerate"])
+        .arg(format!("{fps}"))
+        .arg("-i")
+        .arg(ffmpeg_input(pattern))
+        // yuv420p (what players expect) needs even sides.
+        .args([
+            "-vf",
+            "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+            "-c:v",
+            "libx264",
+            "-pix_fmt",
+            "yuv420p",
+        ])
+        .arg(video)
+        .output()
+        .map_err(|e| format!("cannot run ffmpeg: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "ffmpeg failed making {}: {}",
+            video.display(),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    Ok(())
+}
+
+/// Renders the path named by `a.path` of the scene `a` names.
+pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
+    let name = a.path.as_deref().unwrap_or_default();
+    let frames = a.frames.unwrap_or(1);
+    if !(a.fps.is_finite() && a.fps > 0.0 && a.fps <= 1000.0) {
+        return Err(format!("--fps {} is out of range (0, 1000]", a.fps));
+    }
+    let job = FlightRender {
+        frames,
+        request: a.request()?,
+    };
+    job.validate().map_err(|e| e.to_string())?;
+    let path = scene.path(name).map_err(|e| e.to_string())?;
+    let mut session = Session::new(scene.clone()).map_err(|e| e.to_string())?;
+    let flight = path
+        .prepare(&scene, Some(session.tape()))
+        .map_err(|e| format!("path `{name}`: {e}"))?;
+    let mut modulator = Modulator::new(&scene).map_err(|e| e.to_string())?;
+
+    let pattern = frame_pattern(&a.output, name);
+    // Check the naming and the directory before rendering anything.
+    let last = output::sequence_path(&pattern, frames as u64 - 1)?;
+    if let Some(dir) = last.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    output::open_output(&output::sequence_path(&pattern, 0)?).map_err(|e| e.to_string())?;
+
+    let bar = if a.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let b = indicatif::ProgressBar::new(frames as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} path `{msg}` [{bar:40}] {pos}/{len} frames {elapsed} (eta {eta})",
+            )
+            .map_err(|e| e.to_string())?
+            .progress_chars("=> "),
+        );
+        b.set_message(name.to_string());
+        b
+    };
+    let start = Instant::now();
+    let report = job
+        .run(
+            &mut session,
+            &scene,
+            &flight,
+            &mut |s, t| {
+                modulator.apply(s, t);
+            },
+            &Control::default(),
+            &mut |f| {
+                let file = output::sequence_path(&pattern, f.index as u64)?;
+                let out = output::open_output(&file).map_err(|e| e.to_string())?;
+                output::save_colour(&f.rendered.frame, out, &file).map_err(|e| e.to_string())?;
+                bar.inc(1);
+                Ok(())
+            },
+        )
+        .map_err(|e| e.to_string())?;
+    bar.finish_and_clear();
+    let secs = start.elapsed().as_secs_f64();
+    let first = output::sequence_path(&pattern, 0)?;
+    if !a.quiet {
+        eprintln!(
+            "wrote {frames} frames of path `{name}` ({:.1} s at {} fps) to {} ... in {secs:.1} s \
+             ({:.2} frames/s; {} parameter updates, {} recompiles)",
+            flight.duration(),
+            a.fps,
+            first.display(),
+            frames as f64 / secs,
+            report.param_updates,
+            report.recompiles
+        );
+    }
+    if a.no_video || frames < 2 {
+        return Ok(());
+    }
+    if !ffmpeg_available() {
+        if !a.quiet {
+            eprintln!(
+                "fathom: note: ffmpeg is not on PATH, so no video was made (install it, e.g. \
+                 `apt-get install ffmpeg`, or use --no-video to silence this)"
+            );
+        }
+        return Ok(());
+    }
+    let video = first.with_file_name(format!("{}.mp4", safe_name(name)));
+    encode_video(&pattern, a.fps, &video)?;
+    if !a.quiet {
+        eprintln!("wrote {}", video.display());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn example() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/examples/mandelbulb-dive.ron")
+    }
+
+    fn args(dir: &Path, path: &str, frames: usize) -> RenderArgs {
+        RenderArgs {
+            scene: Some(example()),
+            output: PathBuf::from(format!("{}/", dir.display())),
+            size: (32, 24),
+            threads: Some(1),
+            quiet: true,
+            path: Some(path.into()),
+            frames: Some(frames),
+            ..RenderArgs::defaults()
+        }
+    }
+
+    #[test]
+    fn a_path_renders_to_numbered_frames_and_a_video() {
+        let dir = std::env::temp_dir().join(format!("fathom-path-{}", std::process::id()));
+        crate::cmd_render::run(args(&dir, "dive", 4)).unwrap();
+        let names: Vec<PathBuf> = (0..4)
+            .map(|i| dir.join(format!("dive-0000{i}.png")))
+            .collect();
+        let images: Vec<_> = names
+            .iter()
+            .map(|n| image::open(n).unwrap().to_rgb8())
+            .collect();
+        assert_eq!(images[0].dimensions(), (32, 24));
+        assert_ne!(images[0], images[3], "the camera moves");
+        assert!(
+            ffmpeg_available(),
+            "ffmpeg is not on PATH; scripts/setup.sh installs it"
+        );
+        let video = dir.join("dive.mp4");
+        let probe = Command::new("ffprobe")
+            .args(["-v", "error", "-count_frames", "-select_streams", "v:0"])
+            .args([
+                "-show_entries",
+                "stream=nb_read_frames,width,height",
+                "-of",
+                "csv=p=0",
+            ])
+            .arg(&video)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&probe.stdout);
+        assert_eq!(text.trim(), "32,24,4", "{text}");
+        // Names that are not there are explained.
+        let e = crate::cmd_render::run(args(&dir, "diev", 2)).unwrap_err();
+        assert!(e.contains("did you mean `dive`"), "{e}");
+        let mut plain = args(&dir, "dive", 2);
+        plain.scene = None;
+        plain.preset = Some("menger".into());
+        let e = crate::cmd_render::run(plain).unwrap_err();
+        assert!(e.contains("has no paths"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn frame_patterns_and_their_ffmpeg_form() {
+        assert_eq!(
+            frame_pattern(Path::new("out/"), "dive in"),
+            PathBuf::from("out/dive_in-#####.png")
+        );
+        assert_eq!(
+            frame_pattern(Path::new("shots/f-####.png"), "x"),
+            PathBuf::from("shots/f-####.png")
+        );
+        assert_eq!(
+            ffmpeg_input(Path::new("out/dive-#####.png")),
+            PathBuf::from("out/dive-%05d.png")
+        );
+        assert_eq!(
+            ffmpeg_input(Path::new("out/f.png")),
+            PathBuf::from("out/f-%04d.png")
+        );
+        // The two namings agree.
+        let p = Path::new("o/a-###.png");
+        assert_eq!(
+            output::sequence_path(p, 7).unwrap(),
+            PathBuf::from("o/a-007.png")
+        );
+    }
+}
