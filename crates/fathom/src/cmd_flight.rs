@@ -13,13 +13,14 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-/// Where frame files go: a pattern with one run of `#` (see `output::sequence_path`).
-pub fn frame_pattern(output: &Path, path_name: &str) -> PathBuf {
+/// Where frame files go: a pattern with one run of `#` (see `output::sequence_path`); a
+/// directory gets `NAME-#####.EXT` in it.
+pub fn frame_pattern(output: &Path, path_name: &str, ext: &str) -> PathBuf {
     let text = output.to_string_lossy();
     let is_dir =
         text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) || output.is_dir();
     if is_dir {
-        output.join(format!("{}-#####.png", safe_name(path_name)))
+        output.join(format!("{}-#####.{ext}", safe_name(path_name)))
     } else {
         output.to_path_buf()
     }
@@ -113,7 +114,7 @@ pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
     let mut modulator = Modulator::new(&scene).map_err(|e| e.to_string())?;
     let far = scene.render.max_distance as f32;
 
-    let pattern = frame_pattern(&a.output, name);
+    let pattern = frame_pattern(&a.output, name, "png");
     let kind = output::ImageKind::for_path(&pattern, a.bit_depth).map_err(|e| e.to_string())?;
     // Check the naming and the directory before rendering anything.
     let last = output::sequence_path(&pattern, frames as u64 - 1)?;
@@ -322,11 +323,11 @@ mod tests {
     #[test]
     fn frame_patterns_and_their_ffmpeg_form() {
         assert_eq!(
-            frame_pattern(Path::new("out/"), "dive in"),
+            frame_pattern(Path::new("out/"), "dive in", "png"),
             PathBuf::from("out/dive_in-#####.png")
         );
         assert_eq!(
-            frame_pattern(Path::new("shots/f-####.png"), "x"),
+            frame_pattern(Path::new("shots/f-####.png"), "x", "png"),
             PathBuf::from("shots/f-####.png")
         );
         assert_eq!(
