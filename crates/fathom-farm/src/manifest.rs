@@ -298,7 +298,8 @@ impl FarmDir {
         s
     }
 
-    /// Stores a finished unit: its file (through a temporary name), then its receipt.
+    /// Stores a finished unit: its file (through a temporary name), then its receipt; when the
+    /// receipt cannot be written the file is removed again.
     pub fn commit(&self, unit: &Unit, bytes: &[u8]) -> Result<Receipt, FarmError> {
         let receipt = Receipt {
             job: self.manifest.job.clone(),
@@ -320,9 +321,15 @@ impl FarmDir {
                 });
             }
         }
-        atomic::write(&self.path(unit), bytes)?;
+        let file = self.path(unit);
+        atomic::write(&file, bytes)?;
         let json = serde_json::to_vec_pretty(&receipt).expect("a receipt serialises");
-        atomic::write(&rpath, &json)?;
+        if let Err(e) = atomic::write(&rpath, &json) {
+            // No receipt, no file: a final name is only ever seen with its receipt (but for
+            // a task killed between the two renames, which reads as corrupt and is redone).
+            let _ = std::fs::remove_file(&file);
+            return Err(e);
+        }
         Ok(receipt)
     }
 

@@ -1,7 +1,8 @@
 //! Slurm: the `sbatch` array script of a job directory (one array task per shard, each
-//! running `fathom farm work DIR`, which takes its shard from `SLURM_ARRAY_TASK_ID` and
-//! `SLURM_ARRAY_TASK_COUNT`), submitting it, and waiting for it. No Slurm API is used: the
-//! script is plain text and `sbatch` does the rest.
+//! running `fathom farm work DIR --shard $SLURM_ARRAY_TASK_ID/N` with N written into the
+//! script, so resubmitting some tasks alone, `sbatch --array=3,5 farm.sbatch`, reruns exactly
+//! those shards), submitting it, and waiting for it. No Slurm API is used: the script is
+//! plain text and `sbatch` does the rest.
 
 use crate::error::FarmError;
 use crate::manifest::FarmDir;
@@ -79,13 +80,14 @@ pub fn script(farm: &FarmDir, exe: &Path, o: &SlurmOptions) -> Result<String, Fa
         o.tasks
     );
     s += "# Each task renders the units of its shard that are not done yet; rerun (sbatch this\n";
-    s += "# file again) to finish after a failure: nothing done is rendered twice.\n";
+    s += "# file again, or some tasks: sbatch --array=3,5 FILE) to finish after a failure:\n";
+    s += "# nothing done is rendered twice.\n";
     s += &format!("#SBATCH --job-name=fathom-{job}\n");
     let limit = o.max_running.map(|k| format!("%{k}")).unwrap_or_default();
     s += &format!("#SBATCH --array=0-{}{limit}\n", o.tasks - 1);
     s += &format!("#SBATCH --cpus-per-task={}\n", o.cpus_per_task);
     s += "#SBATCH --ntasks=1\n";
-    s += &format!("#SBATCH --output={}/{LOGS}/task-%a.out\n", dir.display());
+    s += &format!("#SBATCH --output={}/{LOGS}/task-%A-%a.out\n", dir.display());
     if let Some(p) = &o.partition {
         s += &format!("#SBATCH --partition={p}\n");
     }
@@ -94,8 +96,9 @@ pub fn script(farm: &FarmDir, exe: &Path, o: &SlurmOptions) -> Result<String, Fa
     }
     s += "set -euo pipefail\n";
     s += &format!(
-        "exec {} farm work {d} --threads {}\n",
+        "exec {} farm work {d} --shard \"$SLURM_ARRAY_TASK_ID/{}\" --threads {}\n",
         sh(&exe.to_string_lossy()),
+        o.tasks,
         o.cpus_per_task
     );
     Ok(s)
@@ -111,20 +114,35 @@ pub fn write_script(farm: &FarmDir, exe: &Path, o: &SlurmOptions) -> Result<Path
     Ok(path)
 }
 
-/// Submits `script` with `sbatch` (with `wait`, blocks until every task ended and fails if
-/// one failed); returns the job id.
-pub fn submit(script: &Path, wait: bool) -> Result<String, FarmError> {
+/// Waits until no task of Slurm job `id` is pending or running (polling `squeue`, from every
+/// 0.2 s up to every 5 s). Whether the units got done is the job directory's to say.
+pub fn wait(id: &str) -> Result<(), FarmError> {
+    let mut pause = 0.2f64;
+    loop {
+        let out = Command::new("squeue")
+            .args(["-h", "-o", "%i", "-j", id])
+            .output()
+            .map_err(|e| FarmError::Scheduler {
+                command: format!("squeue -j {id}"),
+                message: format!("cannot run squeue ({e})"),
+            })?;
+        let listed = String::from_utf8_lossy(&out.stdout);
+        // A job Slurm no longer knows (purged after it ended) is an error to squeue.
+        if !out.status.success() || listed.trim().is_empty() {
+            return Ok(());
+        }
+        std::thread::sleep(std::time::Duration::from_secs_f64(pause));
+        pause = (pause * 1.5).min(5.0);
+    }
+}
+
+/// Submits `script` with `sbatch` and returns the job id (with `wait_for_it`, after every
+/// task has ended: see [`wait`]).
+pub fn submit(script: &Path, wait_for_it: bool) -> Result<String, FarmError> {
     let mut cmd = Command::new("sbatch");
     cmd.arg("--parsable");
-    if wait {
-        cmd.arg("--wait");
-    }
     cmd.arg(script);
-    let shown = format!(
-        "sbatch{} {}",
-        if wait { " --wait" } else { "" },
-        script.display()
-    );
+    let shown = format!("sbatch {}", script.display());
     let out = cmd.output().map_err(|e| FarmError::Scheduler {
         command: shown.clone(),
         message: format!("cannot run sbatch ({e}); is slurm-client installed and on PATH?"),
@@ -143,12 +161,65 @@ pub fn submit(script: &Path, wait: bool) -> Result<String, FarmError> {
         let err = String::from_utf8_lossy(&out.stderr);
         return Err(FarmError::Scheduler {
             command: shown,
-            message: if id.is_empty() {
-                format!("failed: {}", err.trim())
-            } else {
-                format!("job {id} ended with failed tasks: {}", err.trim())
-            },
+            message: format!("failed: {}", err.trim()),
         });
     }
+    if wait_for_it {
+        wait(&id)?;
+    }
     Ok(id)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Fingerprint, Work};
+    use fathom_render::RenderRequest;
+
+    #[test]
+    fn the_array_script_runs_every_shard_and_refuses_bad_options() {
+        let dir = std::env::temp_dir().join(format!("fathom-farm-sbatch-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let req = RenderRequest {
+            width: 64,
+            height: 48,
+            ..RenderRequest::default()
+        };
+        let fp = Fingerprint::new("s", &req, Work::tiles(12, 64, 48).unwrap()).unwrap();
+        let farm = FarmDir::create(&dir, fp, "s").unwrap();
+        let mut o = SlurmOptions {
+            tasks: 8,
+            cpus_per_task: 2,
+            partition: Some("batch".into()),
+            time: None,
+            max_running: Some(4),
+        };
+        let exe = Path::new("/opt/my fathom/fathom");
+        let s = script(&farm, exe, &o).unwrap();
+        assert!(s.starts_with("#!/bin/bash\n"));
+        assert!(s.contains("#SBATCH --array=0-7%4\n"), "{s}");
+        assert!(s.contains("#SBATCH --cpus-per-task=2\n"));
+        assert!(s.contains("#SBATCH --partition=batch\n"));
+        assert!(s.contains("exec '/opt/my fathom/fathom' farm work "), "{s}");
+        assert!(
+            s.contains("--shard \"$SLURM_ARRAY_TASK_ID/8\" --threads 2\n"),
+            "{s}"
+        );
+        o.tasks = 13;
+        assert!(
+            script(&farm, exe, &o)
+                .unwrap_err()
+                .to_string()
+                .contains("1..=12")
+        );
+        o.tasks = 8;
+        o.time = Some("1 day".into());
+        assert!(
+            script(&farm, exe, &o)
+                .unwrap_err()
+                .to_string()
+                .contains("one word")
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
