@@ -4,7 +4,7 @@
 //! Each finished unit gets a receipt `DIR/receipts/FILE.json` (job id, file, size, SHA-256)
 //! written after its file: tasks never write the same file, so no lock is needed. A unit is
 //! done when its receipt names this job and its file has the receipt's size and checksum;
-//! missing when neither exists; corrupt otherwise (and rendered again by a rerun).
+//! missing when its file does not exist; corrupt otherwise (rendered again by a rerun).
 
 use crate::atomic;
 use crate::error::FarmError;
@@ -264,9 +264,9 @@ impl FarmDir {
             Err(e) => return UnitState::Corrupt(format!("cannot read receipt: {e}")),
         };
         match (bytes, receipt) {
-            (None, None) => UnitState::Missing,
+            // A receipt whose file is gone: the unit is missing (the receipt is replaced).
+            (None, _) => UnitState::Missing,
             (Some(_), None) => UnitState::Corrupt("no receipt (interrupted write?)".into()),
-            (None, Some(_)) => UnitState::Corrupt("receipt without its file".into()),
             (Some(b), Some(r)) => {
                 if r.job != self.manifest.job || r.unit != unit.index || r.file != unit.file {
                     UnitState::Corrupt(format!("receipt of another job or unit ({})", r.job))
