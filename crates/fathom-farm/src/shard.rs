@@ -1,6 +1,9 @@
-//! Shards: task `I` of `N` takes the units `u` with `u % N == I` (a fixed mapping, so any
-//! task can be rerun alone and every unit belongs to exactly one task; striding spreads the
-//! costly middle tiles and the costly stretches of a path over all tasks). The defaults come
+//! Shards: a fixed mapping from units to tasks, so any task can be rerun alone and every unit
+//! belongs to exactly one task. Of `U` units, unit `u` sits at position `p = u k mod U` of a
+//! fixed scrambled order (`k` coprime to `U`, near `0.618 U`: neighbouring units land far
+//! apart) and task `I` of `N` takes the block of positions `[I U / N, (I + 1) U / N)`.
+//! Plain striding (`u mod N`) would give each task whole columns of tiles when `N` divides
+//! the grid's columns, and the costly middle columns to a few tasks. The defaults come
 //! from a Slurm array (`SLURM_ARRAY_TASK_ID` minus `SLURM_ARRAY_TASK_MIN`, and
 //! `SLURM_ARRAY_TASK_COUNT`); Kubernetes indexed jobs and AWS Batch arrays pass
 //! `--shard $JOB_COMPLETION_INDEX/N` or `--shard $AWS_BATCH_JOB_ARRAY_INDEX/N`.
@@ -35,14 +38,15 @@ impl Shard {
         Ok(Shard { index, count })
     }
 
-    /// Whether unit `u` belongs to this shard.
-    pub fn owns(&self, u: usize) -> bool {
-        u % self.count == self.index
+    /// Whether unit `u` of `total` belongs to this shard.
+    pub fn owns(&self, u: usize, total: usize) -> bool {
+        (position(u, total) as u128 * self.count as u128 / total.max(1) as u128) as usize
+            == self.index
     }
 
     /// The units of this shard among `total`, in increasing order.
-    pub fn units(&self, total: usize) -> impl Iterator<Item = usize> + use<> {
-        (self.index..total).step_by(self.count)
+    pub fn units(&self, total: usize) -> Vec<usize> {
+        (0..total).filter(|&u| self.owns(u, total)).collect()
     }
 
     /// The shard a Slurm array task is, from its environment (`None` outside an array).
@@ -87,6 +91,28 @@ impl Shard {
     }
 }
 
+/// Unit `u`'s position in the fixed scrambled order of `total` units.
+fn position(u: usize, total: usize) -> usize {
+    let k = scramble(total) as u128;
+    ((u as u128 * k) % total.max(1) as u128) as usize
+}
+
+/// The multiplier of [`position`]: the first number from `0.618 total` up that is coprime to
+/// `total` (1 for one or two units).
+fn scramble(total: usize) -> usize {
+    fn gcd(a: usize, b: usize) -> usize {
+        if b == 0 { a } else { gcd(b, a % b) }
+    }
+    if total <= 2 {
+        return 1;
+    }
+    let mut k = ((total as f64 * 0.618_033_988_75) as usize).max(1);
+    while gcd(k, total) != 1 {
+        k += 1;
+    }
+    k
+}
+
 impl FromStr for Shard {
     type Err = FarmError;
 
@@ -120,8 +146,12 @@ mod tests {
                 let mut seen = vec![0u32; total];
                 for index in 0..count {
                     let s = Shard::new(index, count).unwrap();
-                    for u in s.units(total) {
-                        assert!(s.owns(u));
+                    let units = s.units(total);
+                    assert!(units.windows(2).all(|w| w[0] < w[1]), "in order");
+                    // Shares differ by at most one unit.
+                    assert!(units.len().abs_diff(total / count) <= 1, "{total}/{count}");
+                    for u in units {
+                        assert!(s.owns(u, total));
                         seen[u] += 1;
                     }
                 }
@@ -130,6 +160,18 @@ mod tests {
                     "{total} units, {count} shards"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn a_grid_of_tiles_is_spread_over_the_tasks_not_cut_into_columns() {
+        // 8 columns x 4 rows, 8 tasks: each task gets tiles of at least 3 columns and 3 rows.
+        for index in 0..8 {
+            let units = Shard::new(index, 8).unwrap().units(32);
+            assert_eq!(units.len(), 4);
+            let cols: std::collections::BTreeSet<_> = units.iter().map(|u| u % 8).collect();
+            let rows: std::collections::BTreeSet<_> = units.iter().map(|u| u / 8).collect();
+            assert!(cols.len() >= 3 && rows.len() >= 3, "{units:?}");
         }
     }
 

@@ -10,6 +10,10 @@
 //! - **resume**: one shard's units deleted and one tile truncated (a task killed midway, a
 //!   damaged file), then the array run again: only those are rendered.
 //!
+//! - **slurm** (with `--slurm`, on the cluster `SLURM_CONF` names, e.g. one started by
+//!   scripts/slurm-local.sh): the same array submitted with sbatch, from submission until
+//!   squeue lists no task of it.
+//!
 //! The minimum over `--repeat` runs of each is reported.
 
 use crate::cmd_render::RenderArgs;
@@ -41,6 +45,9 @@ pub struct FarmBenchArgs {
     /// Runs of each measurement; the fastest is reported.
     #[arg(long, default_value_t = 2)]
     repeat: usize,
+    /// Also run the array through Slurm (sbatch) on the cluster SLURM_CONF names.
+    #[arg(long)]
+    slurm: bool,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -150,7 +157,7 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
             }
             let other = units
                 .iter()
-                .find(|u| !shard.owns(u.index))
+                .find(|u| !shard.owns(u.index, units.len()))
                 .map(|u| farm.path(u));
             if let Some(p) = &other {
                 let b = std::fs::read(p).map_err(|e| e.to_string())?;
@@ -165,6 +172,38 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
                 return Err("the resumed run did not complete the job".into());
             }
         }
+        // Through Slurm.
+        let slurm = if a.slurm {
+            let mut best = f64::INFINITY;
+            for k in 0..a.repeat {
+                let dir = root.join(format!("slurm-{k}"));
+                fresh(&dir)?;
+                let farm = job(&dir)?;
+                let o = fathom_farm::slurm::SlurmOptions {
+                    tasks: a.tasks,
+                    cpus_per_task: 1,
+                    partition: None,
+                    time: None,
+                    max_running: None,
+                };
+                let script =
+                    fathom_farm::slurm::write_script(&farm, &exe, &o).map_err(|e| e.to_string())?;
+                let t = Instant::now();
+                fathom_farm::slurm::submit(&script, true).map_err(|e| e.to_string())?;
+                let ms = ms_since(t);
+                if !farm.status().complete() {
+                    return Err(format!(
+                        "the Slurm array left units undone; see {}/logs",
+                        dir.display()
+                    ));
+                }
+                best = best.min(ms);
+            }
+            json!({ "ms": best, "speed_vs_single": single / best,
+                    "overhead_ms_per_task_vs_local": (best - array.ms) / a.tasks as f64 })
+        } else {
+            serde_json::Value::Null
+        };
         let units = farm.manifest.units.len();
         let pixels = (a.size.0 * a.size.1) as f64;
         Ok(json!({
@@ -187,6 +226,7 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
             },
             "empty_task_ms": empty,
             "resume": { "units_redone": redone, "ms": resume, "fraction_of_full_array": resume / array.ms },
+            "slurm": slurm,
         }))
     })();
     let _ = std::fs::remove_dir_all(&root);

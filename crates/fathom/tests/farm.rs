@@ -97,7 +97,7 @@ fn a_local_array_renders_a_still_identical_to_one_process_and_resumes_only_what_
         "the assembled still differs from the single-process render"
     );
 
-    // A task lost its units (shard 3 of 8: tiles 3 and 11) and a tile was truncated.
+    // Two tiles were lost and one was truncated.
     for t in ["tile-00003.png", "tile-00011.png"] {
         std::fs::remove_file(d.join("job").join(t)).unwrap();
     }
