@@ -48,6 +48,33 @@ pub fn write_with(
     })
 }
 
+/// Writes `bytes` to `path` only if nothing is there: through a temporary file and a hard
+/// link, which fails if the name exists (one creator wins a race, and the name never shows
+/// a partial file). Returns whether this call created it.
+pub fn create_exclusive(path: &Path, bytes: &[u8]) -> Result<bool, FarmError> {
+    let tmp = temp_path(path);
+    let werr = |source| FarmError::Write {
+        path: path.into(),
+        source,
+    };
+    let filled = (|| {
+        let mut f = std::fs::File::create_new(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()
+    })();
+    if let Err(e) = filled {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(werr(e));
+    }
+    let linked = std::fs::hard_link(&tmp, path);
+    let _ = std::fs::remove_file(&tmp);
+    match linked {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(false),
+        Err(e) => Err(werr(e)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,6 +135,16 @@ mod tests {
         write(&path, &bytes).unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), bytes);
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        // Exclusive creation: the first wins, the second changes nothing.
+        let m = dir.join("farm.json");
+        assert!(create_exclusive(&m, b"job A").unwrap());
+        assert!(!create_exclusive(&m, b"job B").unwrap());
+        assert_eq!(std::fs::read(&m).unwrap(), b"job A");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            2,
+            "temporary left"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -190,11 +190,25 @@ impl FarmDir {
             path: dir.join(RECEIPTS),
             source,
         })?;
-        // The scene first: a manifest never exists without its scene. Concurrent tasks of one
-        // job write the same bytes, so whichever rename lands last changes nothing.
-        atomic::write(&dir.join(SCENE), scene_text.as_bytes())?;
+        // The scene first (a manifest never exists without its scene), each created only if
+        // absent: of two jobs racing into a new directory, one wins each name and the other
+        // is refused, never mixed in; tasks of one job write identical bytes.
+        if !atomic::create_exclusive(&dir.join(SCENE), scene_text.as_bytes())?
+            && std::fs::read(dir.join(SCENE)).ok().as_deref() != Some(scene_text.as_bytes())
+            && !dir.join(MANIFEST).exists()
+        {
+            return Err(FarmError::DifferentJob {
+                dir: dir.into(),
+                what: "the scene".into(),
+                existing: "(being created, or left by an interrupted creation)".into(),
+                new: manifest.job,
+            });
+        }
         let json = serde_json::to_vec_pretty(&manifest).expect("a manifest serialises");
-        atomic::write(&dir.join(MANIFEST), &json)?;
+        if !atomic::create_exclusive(&dir.join(MANIFEST), &json)? {
+            // Another task created it meanwhile: same job, or refused.
+            return FarmDir::create(dir, manifest.fingerprint, scene_text);
+        }
         Ok(FarmDir {
             dir: dir.into(),
             manifest,

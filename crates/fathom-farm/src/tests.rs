@@ -363,3 +363,36 @@ fn zoom_frames_are_settled_stills_that_do_not_depend_on_the_shard() {
     std::fs::remove_dir_all(&a).ok();
     std::fs::remove_dir_all(&b).ok();
 }
+
+#[test]
+fn of_two_jobs_racing_into_a_new_directory_exactly_one_wins_and_it_is_whole() {
+    for round in 0..20 {
+        let dir = scratch(&format!("race-{round}"));
+        // Odd rounds: two scenes; even rounds: one scene, two tilings.
+        let jobs = [
+            ("scene A", 4),
+            (if round % 2 == 1 { "scene B" } else { "scene A" }, 6),
+        ];
+        let results: Vec<_> = std::thread::scope(|s| {
+            let handles: Vec<_> = jobs
+                .iter()
+                .map(|&(scene, tiles)| {
+                    let dir = dir.clone();
+                    s.spawn(move || fake_job(&dir, scene, tiles))
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        let won: Vec<&FarmDir> = results.iter().filter_map(|r| r.as_ref().ok()).collect();
+        assert_eq!(won.len(), 1, "round {round}: {results:?}");
+        for r in &results {
+            if let Err(e) = r {
+                assert!(matches!(e, FarmError::DifferentJob { .. }), "{e}");
+            }
+        }
+        let reopened = FarmDir::open(&dir).unwrap();
+        assert_eq!(reopened.manifest.job, won[0].manifest.job);
+        reopened.scene_text().unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -5,6 +5,7 @@
 //! - **array**: the same still as a `--tiles` job run as a local array of `--tasks` shards,
 //!   `--parallel` at a time, one thread each (`fathom farm run`: the same processes a Slurm
 //!   array runs); per task, its wall time minus its units' render time is its overhead;
+//! - **assemble**: verifying every unit's checksum and stitching the tiles into the PNG;
 //! - **empty_task**: a task whose units are all done (process start, manifest, scene
 //!   compile, checksums): the fixed cost of a task;
 //! - **resume**: one shard's units deleted and one tile truncated (a task killed midway, a
@@ -136,7 +137,9 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
         let array = best.expect("repeat >= 1");
         let farm = FarmDir::open(&dir).map_err(|e| e.to_string())?;
         let assembled = root.join("assembled.png");
+        let t = Instant::now();
         fathom_farm::assemble::assemble(&farm, &assembled).map_err(|e| e.to_string())?;
+        let assemble_ms = ms_since(t);
         let identical = std::fs::read(&assembled).map_err(|e| e.to_string())?
             == std::fs::read(&still).map_err(|e| e.to_string())?;
         let over = overheads(&array);
@@ -223,6 +226,7 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
                 "overhead_ms_per_task": { "mean": mean(&over),
                     "max": over.iter().cloned().fold(0.0, f64::max) },
                 "assembled_identical_to_single": identical,
+                "assemble_ms": assemble_ms,
             },
             "empty_task_ms": empty,
             "resume": { "units_redone": redone, "ms": resume, "fraction_of_full_array": resume / array.ms },
