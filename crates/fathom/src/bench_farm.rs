@@ -11,6 +11,10 @@
 //! - **resume**: one shard's units deleted and one tile truncated (a task killed midway, a
 //!   damaged file), then the array run again: only those are rendered.
 //!
+//! - **path**: `--path-frames` frames of the dive path (docs/examples/mandelbulb-dive.ron) at
+//!   `--path-size`: `fathom render --path` in one process against a local array of `--tasks`
+//!   (each task replays the modulation of the frames before its own, prepares the path and
+//!   compiles the scene once), frames compared byte for byte;
 //! - **slurm** (with `--slurm`, on the cluster `SLURM_CONF` names, e.g. one started by
 //!   scripts/slurm-local.sh): the same array submitted with sbatch, from submission until
 //!   squeue lists no task of it.
@@ -46,6 +50,12 @@ pub struct FarmBenchArgs {
     /// Runs of each measurement; the fastest is reported.
     #[arg(long, default_value_t = 2)]
     repeat: usize,
+    /// Frames of the path measurement (0: skip it).
+    #[arg(long, default_value_t = 16)]
+    path_frames: usize,
+    /// Frame size of the path measurement.
+    #[arg(long, default_value = "160x120", value_parser = crate::args::parse_size)]
+    path_size: (u32, u32),
     /// Also run the array through Slurm (sbatch) on the cluster SLURM_CONF names.
     #[arg(long)]
     slurm: bool,
@@ -207,6 +217,11 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
         } else {
             serde_json::Value::Null
         };
+        let path = if a.path_frames > 0 {
+            path_bench(&a, &exe, &root, parallel)?
+        } else {
+            serde_json::Value::Null
+        };
         let units = farm.manifest.units.len();
         let pixels = (a.size.0 * a.size.1) as f64;
         Ok(json!({
@@ -231,6 +246,7 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
             "empty_task_ms": empty,
             "resume": { "units_redone": redone, "ms": resume, "fraction_of_full_array": resume / array.ms },
             "slurm": slurm,
+            "path": path,
         }))
     })();
     let _ = std::fs::remove_dir_all(&root);
@@ -240,4 +256,77 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
         serde_json::to_string_pretty(&v).map_err(|e| e.to_string())?
     );
     Ok(())
+}
+
+const DIVE: &str = include_str!("../../../docs/examples/mandelbulb-dive.ron");
+
+/// The path measurement (see the module documentation).
+fn path_bench(
+    a: &FarmBenchArgs,
+    exe: &Path,
+    root: &Path,
+    parallel: usize,
+) -> Result<serde_json::Value, String> {
+    let scene = root.join("dive.ron");
+    std::fs::write(&scene, DIVE).map_err(|e| e.to_string())?;
+    let size = format!("{}x{}", a.path_size.0, a.path_size.1);
+    let frames = a.path_frames.to_string();
+    let mut single = f64::INFINITY;
+    let seq = root.join("path-single");
+    for _ in 0..a.repeat {
+        fresh(&seq)?;
+        let t = Instant::now();
+        let out = Command::new(exe)
+            .arg("render")
+            .arg(&scene)
+            .args(["-q", "--no-video", "--path", "dive", "--frames", &frames])
+            .args(["--size", &size, "--threads", &parallel.to_string(), "-o"])
+            .arg(format!("{}/", seq.display()))
+            .output()
+            .map_err(|e| e.to_string())?;
+        if !out.status.success() {
+            return Err(String::from_utf8_lossy(&out.stderr).into_owned());
+        }
+        single = single.min(ms_since(t));
+    }
+    let mut best: Option<LocalRun> = None;
+    let mut dir = root.join("path-array");
+    for k in 0..a.repeat {
+        dir = root.join(format!("path-array-{k}"));
+        fresh(&dir)?;
+        let args = RenderArgs {
+            scene: Some(scene.clone()),
+            size: a.path_size,
+            path: Some("dive".into()),
+            frames: Some(a.path_frames),
+            output: dir.clone(),
+            quiet: true,
+            ..RenderArgs::defaults()
+        };
+        let farm = crate::cmd_farm::create_render_job(&args)?;
+        let run = run_local(exe, &farm.dir, a.tasks, parallel, 1).map_err(|e| e.to_string())?;
+        if best.as_ref().is_none_or(|b| run.ms < b.ms) {
+            best = Some(run);
+        }
+    }
+    let array = best.expect("repeat >= 1");
+    let identical = (0..a.path_frames).all(|i| {
+        let f = std::fs::read(dir.join(format!("frame-{i:06}.png"))).ok();
+        let s = std::fs::read(seq.join(format!("dive-{i:05}.png"))).ok();
+        f.is_some() && f == s
+    });
+    let over = overheads(&array);
+    Ok(json!({
+        "frames": a.path_frames,
+        "size": size,
+        "single": { "ms": single, "frames_per_s": a.path_frames as f64 / single * 1e3, "threads": parallel },
+        "array": {
+            "ms": array.ms,
+            "frames_per_s": a.path_frames as f64 / array.ms * 1e3,
+            "speed_vs_single": single / array.ms,
+            "overhead_ms_per_task": { "mean": mean(&over),
+                "max": over.iter().cloned().fold(0.0, f64::max) },
+            "frames_identical_to_single": identical,
+        },
+    }))
 }
