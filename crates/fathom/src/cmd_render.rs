@@ -38,6 +38,9 @@ pub enum TracerKind {
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 -o dive/
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 \
 ///       -o shots/dive-####.exr --camera-path shots/dive.glb
+///   fathom render --preset menger --size 8192x8192 --tiles 64 --shard 3/64 -o poster/
+///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 --shard 0/8 -o dive/
+///   (farm shards: see `fathom farm --help`; then `fathom farm assemble poster/ -o poster.png`)
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct RenderArgs {
@@ -133,6 +136,16 @@ pub struct RenderArgs {
     /// glTF cannot animate it).
     #[arg(long, requires = "path")]
     pub camera_path: Option<PathBuf>,
+    /// Render farm: cut the still into N tiles, units of a farm job in the directory -o DIR
+    /// (with --shard, only that shard's tiles; else all, or the Slurm array task's share).
+    #[arg(long, value_name = "N", conflicts_with = "path")]
+    pub tiles: Option<usize>,
+    /// Render farm: render shard I of N of the job's units (tiles with --tiles, frames with
+    /// --path) into the job directory -o DIR; units already done are skipped. Without a
+    /// value: from SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT. Assemble the result with
+    /// `fathom farm assemble DIR`.
+    #[arg(long, value_name = "I/N", num_args = 0..=1, default_missing_value = "")]
+    pub shard: Option<String>,
 }
 
 /// Which renderer `fathom render` uses.
@@ -156,7 +169,7 @@ pub enum StereoKind {
 }
 
 /// Loads the scene named by the arguments and applies the camera overrides.
-fn load_scene(a: &RenderArgs) -> Result<Scene, String> {
+pub(crate) fn load_scene(a: &RenderArgs) -> Result<Scene, String> {
     let mut scene = match (&a.scene, &a.preset) {
         (Some(path), _) => scene_file::load(path).map_err(|e| e.to_string())?,
         (None, Some(p)) => presets::load(p).map_err(|e| e.to_string())?,
@@ -274,6 +287,9 @@ fn progress_bar(quiet: bool) -> Result<indicatif::ProgressBar, String> {
 }
 
 pub fn run(a: RenderArgs) -> Result<(), String> {
+    if a.shard.is_some() || a.tiles.is_some() {
+        return crate::cmd_farm::render_shard(&a);
+    }
     if a.path.is_some() {
         let scene = load_scene(&a)?;
         return crate::cmd_flight::run(&a, scene);
