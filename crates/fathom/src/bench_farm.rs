@@ -124,7 +124,7 @@ pub fn run(a: FarmBenchArgs) -> Result<(), String> {
         let job = |dir: &Path| -> Result<FarmDir, String> {
             let args = RenderArgs {
                 preset: Some(a.preset.clone()),
-                size: a.size,
+                size: Some(a.size),
                 tiles: Some(a.tiles),
                 output: PathBuf::from(dir),
                 quiet: true,
@@ -296,7 +296,7 @@ fn path_bench(
         fresh(&dir)?;
         let args = RenderArgs {
             scene: Some(scene.clone()),
-            size: a.path_size,
+            size: Some(a.path_size),
             path: Some("dive".into()),
             frames: Some(a.path_frames),
             output: dir.clone(),

@@ -56,9 +56,10 @@ pub struct RenderArgs {
     /// Bits per channel of a PNG output: 8 or 16.
     #[arg(long, default_value_t = 8)]
     pub bit_depth: u8,
-    /// Image size WIDTHxHEIGHT, each side at most 16384 and at most 64 Mpixel in all.
-    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
-    pub size: (u32, u32),
+    /// Image size WIDTHxHEIGHT, each side at most 16384 and at most 64 Mpixel in all
+    /// [default: 1280x720, or a Mandelbulber .fract file's own image size].
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
     /// Camera position x,y,z (overrides the scene).
     #[arg(long, value_parser = parse_vec, allow_hyphen_values = true)]
     pub eye: Option<DVec3>,
@@ -240,7 +241,7 @@ impl RenderArgs {
     /// The request these flags describe, checked.
     pub fn request(&self) -> Result<RenderRequest, String> {
         let backend = self.backend()?;
-        let (width, height) = self.size;
+        let (width, height) = self.size.unwrap_or(DEFAULT_SIZE);
         let req = RenderRequest {
             width,
             height,
@@ -286,7 +287,27 @@ fn progress_bar(quiet: bool) -> Result<indicatif::ProgressBar, String> {
     Ok(b)
 }
 
-pub fn run(a: RenderArgs) -> Result<(), String> {
+/// The image size of `fathom render` without --size.
+pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
+
+/// A Mandelbulber `.fract` scene renders at its own image size unless --size says otherwise
+/// (its camera's framing belongs to that aspect ratio).
+fn size_from_fract(a: &mut RenderArgs) -> Result<(), String> {
+    if a.size.is_some() {
+        return Ok(());
+    }
+    if let Some(path) = a.scene.as_deref().filter(|p| {
+        p.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("fract"))
+    }) {
+        let imported = fathom_core::scene_file::fract::load(path).map_err(|e| e.to_string())?;
+        a.size = Some(imported.image_size);
+    }
+    Ok(())
+}
+
+pub fn run(mut a: RenderArgs) -> Result<(), String> {
+    size_from_fract(&mut a)?;
     if a.shard.is_some() || a.tiles.is_some() {
         return crate::cmd_farm::render_shard(&a);
     }
@@ -363,7 +384,7 @@ pub fn run_default() -> Result<(), String> {
     let start = Instant::now();
     let a = RenderArgs {
         output: PathBuf::from("fathom.png"),
-        size: (1280, 720),
+        size: Some(DEFAULT_SIZE),
         quiet: true,
         ..RenderArgs::defaults()
     };
@@ -413,7 +434,7 @@ mod tests {
     fn args(output: &str, size: (u32, u32)) -> RenderArgs {
         RenderArgs {
             output: PathBuf::from(output),
-            size,
+            size: Some(size),
             threads: Some(1),
             quiet: true,
             ..RenderArgs::defaults()
@@ -496,6 +517,36 @@ mod tests {
             same,
             "the 16-bit image is the 8-bit one with more precision"
         );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_mandelbulber_file_renders_at_its_own_size_unless_told() {
+        let dir = std::env::temp_dir().join(format!("fathom-fract-size-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let fract = dir.join("b.fract");
+        std::fs::write(
+            &fract,
+            "# Mandelbulber settings file\n# version 2.20\n[main_parameters]\n\
+             camera 0 -3 0;\ntarget 0 0 0;\nimage_width 36;\nimage_height 20;\nN 8;\n\
+             formula_1 2;\n[fractal_1]\npower 8;\n",
+        )
+        .unwrap();
+        let mut a = args(dir.join("own.png").to_str().unwrap(), (1, 1));
+        a.scene = Some(fract.clone());
+        a.size = None;
+        run(a).unwrap();
+        let img = image::open(dir.join("own.png")).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (36, 20));
+        assert_ne!(
+            img.get_pixel(18, 10),
+            img.get_pixel(0, 0),
+            "the bulb is in the middle"
+        );
+        let mut a = args(dir.join("told.png").to_str().unwrap(), (24, 16));
+        a.scene = Some(fract);
+        run(a).unwrap();
+        assert_eq!(image::open(dir.join("told.png")).unwrap().width(), 24);
         std::fs::remove_dir_all(&dir).ok();
     }
 
