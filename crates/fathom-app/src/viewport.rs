@@ -56,6 +56,8 @@ pub struct Viewport {
     pub error: Option<String>,
     /// The key whose stillness `still_since` times.
     still_key: Option<u64>,
+    /// A view whose frame was lost with its worker: not asked for again until the view changes.
+    failed_key: Option<u64>,
 }
 
 /// The view a frame is of: everything that changes its pixels.
@@ -87,6 +89,7 @@ impl Viewport {
             full_after_still_ms: None,
             error: None,
             still_key: None,
+            failed_key: None,
         }
     }
 
@@ -167,6 +170,10 @@ impl Viewport {
         if w == 0 || h == 0 {
             return; // minimised or collapsed: nothing to draw
         }
+        if self.failed_key == Some(key) {
+            return;
+        }
+        self.failed_key = None;
         if self.shown.as_ref().is_none_or(|s| s.key != key)
             && self.in_flight.as_ref().is_none_or(|f| f.key != key)
         {
@@ -247,6 +254,19 @@ impl Viewport {
             cancel,
             sent: Instant::now(),
         });
+    }
+
+    /// The worker stopped: the frame in flight never comes back. Its view is marked failed
+    /// and not asked for again until the view changes.
+    pub fn worker_lost(&mut self) {
+        if let Some(f) = self.in_flight.take() {
+            self.failed_key = Some(f.key);
+        }
+    }
+
+    /// Frames asked of the worker so far.
+    pub fn frames_asked(&self) -> u64 {
+        self.next_id
     }
 
     /// Whether a frame is being rendered.
