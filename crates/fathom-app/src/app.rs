@@ -1140,7 +1140,10 @@ impl ExplorerApp {
             compiles: self.compiles,
             camera: cam.clone(),
         };
-        if let Err(e) = self.script.log(&line) {
+        // Frames eframe still runs after the scripted run asked to close are not logged.
+        if !self.script.closing
+            && let Err(e) = self.script.log(&line)
+        {
             self.note(e, true);
         }
         if self.script.finished(self.frames) && !self.script.closing {
