@@ -8,6 +8,12 @@
 //! finish (it is short) unless it has run past twice the target. Octree frames step the tree
 //! instead, at full resolution (the octree holds its frame time by its subdivision budget),
 //! until it asks for no more subdivision.
+//!
+//! A GPU frame cannot be cancelled once submitted, so on the GPU the first refinement waits
+//! until the view has held still for [`GPU_REFINE_DELAY_MS`]: a slider dragged slowly (or a
+//! camera nudged key by key) would otherwise start a full-resolution frame between two of its
+//! steps and the next step would wait for it. The CPU tracer's refinements start at once (they
+//! stop at the next tile when the view moves).
 
 use crate::scale::RenderScale;
 use crate::worker::{FrameDone, FrameFailure, FrameJob, Picture, Stage, Worker};
@@ -15,6 +21,9 @@ use fathom_core::Camera;
 use fathom_render::{Backend, CancelToken, RenderRequest, Stats};
 use std::hash::{Hash, Hasher};
 use std::time::Instant;
+
+/// How long the view must hold still before the GPU starts refining it, ms.
+pub const GPU_REFINE_DELAY_MS: f64 = 150.0;
 
 /// A frame being rendered.
 struct InFlight {
@@ -203,6 +212,12 @@ impl Viewport {
                     }
                     Stage::Interactive
                 } else if s.stage == Stage::Interactive {
+                    let still_ms = self
+                        .still_since
+                        .map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64() * 1e3);
+                    if base.backend == Backend::Gpu && still_ms < GPU_REFINE_DELAY_MS {
+                        return;
+                    }
                     Stage::Full
                 } else if s.stage == Stage::Full && self.refine_supersample > 1 {
                     Stage::Supersampled

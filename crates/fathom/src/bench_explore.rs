@@ -73,11 +73,16 @@ pub fn run(a: ExploreBenchArgs) -> Result<(), String> {
         let scene = presets::load(name).map_err(|e| e.to_string())?;
         let name = presets::find(name).map_err(|e| e.to_string())?.name;
         eprintln!("bench explore: {name} on the CPU tracer");
-        rows.push(measure(name, &scene, &cfg, None)?);
+        let row = measure(name, &scene, &cfg, None)?;
+        // Each row as it is done (a long GPU run may be stopped before the end).
+        eprintln!("{}", serde_json::to_string(&row).map_err(|e| e.to_string())?);
+        rows.push(row);
         if !a.no_gpu {
             eprintln!("bench explore: {name} on the GPU renderer");
             let r = fathom_gpu::Renderer::headless().map_err(|e| e.to_string())?;
-            rows.push(measure(name, &scene, &cfg, Some(r))?);
+            let row = measure(name, &scene, &cfg, Some(r))?;
+            eprintln!("{}", serde_json::to_string(&row).map_err(|e| e.to_string())?);
+            rows.push(row);
         }
     }
     let out = serde_json::json!({

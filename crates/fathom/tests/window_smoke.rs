@@ -1,8 +1,10 @@
-//! The real window, once, under a virtual X server: `xvfb-run` (installed by scripts/setup.sh)
-//! starts Xvfb for the one command and stops it afterwards. The explorer runs 30 frames on the
-//! menger preset, logs each and renders its final view to a PNG; the test checks that the
-//! window drew frames and that the image is the scene: equal to an offline render of the
-//! preset's view within a stated tolerance. Skipped, saying why, only when xvfb-run is missing.
+//! The real window under a virtual X server: `xvfb-run` (installed by scripts/setup.sh) starts
+//! Xvfb for the one command and stops it afterwards. The explorer runs 30 frames on the menger
+//! preset, logs each and renders its final view to a PNG; the test checks that the window drew
+//! frames and that the image is the scene: equal to an offline render of the preset's view
+//! within a stated tolerance. A second test runs `fathom` with no arguments on the display and
+//! checks that it opened the window (still running after a while, no fathom.png) instead of
+//! rendering to a file. Skipped, saying why, only when xvfb-run is missing.
 
 use fathom_core::presets;
 use fathom_render::{RenderRequest, Session};
@@ -14,6 +16,9 @@ use std::process::Command;
 /// rounding. At most this fraction of pixels may differ by more than `LEVELS` in any channel.
 const FRACTION: f64 = 0.005;
 const LEVELS: u8 = 8;
+
+/// One Xvfb at a time (`xvfb-run -a` picks a free display number, racily).
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn have_xvfb_run() -> bool {
     Command::new("sh")
@@ -31,6 +36,7 @@ fn scratch(name: &str) -> PathBuf {
 
 #[test]
 fn the_window_runs_under_xvfb_and_its_screenshot_is_the_scene() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     if !have_xvfb_run() {
         eprintln!(
             "SKIPPED the_window_runs_under_xvfb_and_its_screenshot_is_the_scene: xvfb-run is not \
@@ -116,5 +122,37 @@ fn the_window_runs_under_xvfb_and_its_screenshot_is_the_scene() {
     let hits = (0..frame.len()).filter(|&i| frame.is_hit(i)).count();
     let coverage = hits as f64 / frame.len() as f64;
     assert!((0.1..0.95).contains(&coverage), "coverage {coverage}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn fathom_without_arguments_opens_the_window_when_a_display_is_present() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    if !have_xvfb_run() {
+        eprintln!(
+            "SKIPPED fathom_without_arguments_opens_the_window_when_a_display_is_present: \
+             xvfb-run is not installed (bash scripts/setup.sh installs xvfb and xauth)"
+        );
+        return;
+    }
+    let dir = scratch("no-args-window");
+    // `timeout` (coreutils) stops fathom after 10 s, inside xvfb-run, which then stops Xvfb.
+    // A window still open then exits 124; had no window opened, fathom would have rendered
+    // fathom.png and exited 0 within a second or two.
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x800x24", "timeout", "10"])
+        .arg(env!("CARGO_BIN_EXE_fathom"))
+        .current_dir(&dir)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_RUNTIME_DIR", &dir)
+        .output()
+        .expect("xvfb-run runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(124),
+        "fathom ended by itself instead of keeping its window open: {stdout}"
+    );
+    assert!(!dir.join("fathom.png").exists(), "{stdout}");
     let _ = std::fs::remove_dir_all(&dir);
 }
