@@ -379,8 +379,7 @@ pub fn measure(
             let mut sent = Vec::new();
             let mut next_at = Instant::now();
             let start = Instant::now();
-            while sent.len() < cfg.edits || rig.last_frame.is_none_or(|(g, _)| g < rig.generation)
-            {
+            while sent.len() < cfg.edits || rig.last_frame.is_none_or(|(g, _)| g < rig.generation) {
                 if start.elapsed() > rig.timeout {
                     return Err("timed out waiting for the edits to reach the screen".into());
                 }

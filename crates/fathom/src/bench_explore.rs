@@ -75,13 +75,19 @@ pub fn run(a: ExploreBenchArgs) -> Result<(), String> {
         eprintln!("bench explore: {name} on the CPU tracer");
         let row = measure(name, &scene, &cfg, None)?;
         // Each row as it is done (a long GPU run may be stopped before the end).
-        eprintln!("{}", serde_json::to_string(&row).map_err(|e| e.to_string())?);
+        eprintln!(
+            "{}",
+            serde_json::to_string(&row).map_err(|e| e.to_string())?
+        );
         rows.push(row);
         if !a.no_gpu {
             eprintln!("bench explore: {name} on the GPU renderer");
             let r = fathom_gpu::Renderer::headless().map_err(|e| e.to_string())?;
             let row = measure(name, &scene, &cfg, Some(r))?;
-            eprintln!("{}", serde_json::to_string(&row).map_err(|e| e.to_string())?);
+            eprintln!(
+                "{}",
+                serde_json::to_string(&row).map_err(|e| e.to_string())?
+            );
             rows.push(row);
         }
     }
