@@ -12,6 +12,7 @@ use fathom_core::scene::{Call, DomainOp, Node, Shape};
 use fathom_core::transforms::Transform;
 use fathom_core::{Scene, Tape};
 use fathom_gpu::{Projection, RenderOptions};
+use fathom_trace::post::to_rgb8;
 
 fn cpu(scene: &Scene, w: u32, h: u32) -> Frame {
     let o = fathom_trace::Options {
@@ -118,4 +119,95 @@ fn too_deep_a_zoom_hands_off_to_the_cpu() {
     scene.camera.target = glam::DVec3::new(0.0, 0.0, 1.0);
     let e = r.render_scene(&scene, &mono(64, 48)).unwrap_err();
     assert!(e.to_string().contains("on the CPU"), "{e}");
+}
+
+/// Copies an RGBA8 texture into host memory (rows padded to wgpu's copy alignment on the
+/// device, unpadded here) and returns its RGB bytes, row-major.
+fn read_rgb(r: &fathom_gpu::Renderer, tex: &wgpu::Texture) -> Vec<u8> {
+    let gpu = r.gpu();
+    let (w, h) = (tex.width(), tex.height());
+    let row =
+        (w * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buf = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test texture copy"),
+        size: (row * h) as u64,
+        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    enc.copy_texture_to_buffer(
+        tex.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buf,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        tex.size(),
+    );
+    gpu.queue.submit([enc.finish()]);
+    let bytes = gpu.read_buffer(&buf, (row * h) as u64).unwrap();
+    let mut rgb = Vec::with_capacity((w * h * 3) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * row + x * 4) as usize;
+            rgb.extend_from_slice(&bytes[i..i + 3]);
+        }
+    }
+    rgb
+}
+
+#[test]
+fn the_texture_left_for_a_window_is_the_image_a_readback_renders() {
+    // A window presents `render_to_texture`'s image without reading anything back; it must be
+    // the picture `render` returns for files (same passes, tonemap and sRGB encoding).
+    let mut r = renderer();
+    for (name, projection) in [
+        ("menger", Projection::Mono),
+        (
+            "mandelbulb",
+            Projection::SideBySide {
+                eye_separation: 0.06,
+            },
+        ),
+    ] {
+        let scene = presets::load(name).unwrap();
+        let tape = Tape::compile(&scene).unwrap();
+        r.set_tape(&tape).unwrap();
+        let o = RenderOptions {
+            projection,
+            ..mono(96, 64)
+        };
+        let (frame, _) = r.render(&scene, &tape, &scene.camera, &o).unwrap();
+        let want = to_rgb8(&frame);
+        let tex = r
+            .render_to_texture(&scene, &tape, &scene.camera, &o)
+            .unwrap();
+        assert_eq!(
+            (tex.width(), tex.height()),
+            (frame.width, frame.height),
+            "{name}: texture size"
+        );
+        let tex = tex.clone();
+        let got = read_rgb(&r, &tex);
+        let worst = want
+            .iter()
+            .zip(&got)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap();
+        // Both encode the same f32 colour; the shader's pow and the CPU's powf may round apart.
+        assert!(
+            worst <= 1,
+            "{name}: texture and readback differ by up to {worst}/255"
+        );
+        assert!(
+            got.iter().any(|&v| v > 40) && got.iter().any(|&v| v < 200),
+            "{name}: the texture holds a picture, not a flat colour"
+        );
+    }
 }

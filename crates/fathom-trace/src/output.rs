@@ -99,7 +99,7 @@ pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<()
 /// The tonemapped, gamma-encoded colour image as a 16-bit PNG (the same curve as the 8-bit
 /// one, without its banding in dark gradients). The encoder takes 16-bit samples in native byte
 /// order and writes them big-endian as PNG requires.
-pub fn save_colour16(frame: &Frame, file: File, path: &Path) -> Result<(), String> {
+pub fn save_colour16(frame: &Frame, file: File, path: &Path) -> Result<(), OutputError> {
     use image::ImageEncoder;
     let data: Vec<u8> = frame
         .colour
@@ -114,7 +114,7 @@ pub fn save_colour16(frame: &Frame, file: File, path: &Path) -> Result<(), Strin
         frame.height,
         image::ExtendedColorType::Rgb16,
     )
-    .map_err(|e| format!("cannot write {}: {e}", path.display()))
+    .map_err(|e| write_error(path, e))
 }
 
 /// The channels of the layered EXR, in the OpenEXR layer naming convention: `R G B` linear
@@ -125,7 +125,12 @@ pub const LAYER_CHANNELS: [&str; 9] = [
 ];
 
 /// Every G-buffer layer in one EXR for compositing (see [`LAYER_CHANNELS`]).
-pub fn save_layers(frame: &Frame, far: f32, path: &Path) -> Result<(), String> {
+pub fn save_layers(frame: &Frame, far: f32, path: &Path) -> Result<(), OutputError> {
+    save_layers_to(frame, far, open_output(path)?, path)
+}
+
+/// [`save_layers`] into a file already opened (by [`open_output`]) at `path`.
+pub fn save_layers_to(frame: &Frame, far: f32, file: File, path: &Path) -> Result<(), OutputError> {
     use exr::prelude::*;
     let n = frame.len();
     let hit = |i: usize| frame.is_hit(i);
@@ -150,8 +155,77 @@ pub fn save_layers(frame: &Frame, far: f32, path: &Path) -> Result<(), String> {
     );
     Image::from_layer(layer)
         .write()
-        .to_file(path)
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        .to_buffered(BufWriter::new(file))
+        .map_err(|e| write_error(path, e))
+}
+
+/// How the main image of a render is encoded, chosen by the output's extension and the
+/// requested bit depth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageKind {
+    /// Tonemapped sRGB, 8 bits per channel.
+    Png8,
+    /// Tonemapped sRGB, 16 bits per channel.
+    Png16,
+    /// Every layer, linear (see [`LAYER_CHANNELS`]).
+    LayeredExr,
+}
+
+/// Why an image kind cannot be chosen for an output path.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum ImageKindError {
+    #[error(
+        "{path}: cannot write images with extension `{ext}`; choose .png (8 or 16 bits, \
+         tonemapped) or .exr (layers: linear colour, mask, depth, normal, material id)"
+    )]
+    Extension { path: String, ext: String },
+    #[error("--bit-depth {bits} is not one of 8, 16")]
+    BitDepth { bits: u8 },
+    #[error("{path}: --bit-depth 16 applies to PNG; an .exr output is always 32-bit float")]
+    ExrDepth { path: String },
+}
+
+impl ImageKind {
+    /// `.png` (or no extension) is PNG at `bits` (8 or 16); `.exr` is the layered EXR.
+    pub fn for_path(path: &Path, bits: u8) -> Result<ImageKind, ImageKindError> {
+        if bits != 8 && bits != 16 {
+            return Err(ImageKindError::BitDepth { bits });
+        }
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            None | Some("png") => Ok(if bits == 16 {
+                ImageKind::Png16
+            } else {
+                ImageKind::Png8
+            }),
+            Some("exr") if bits == 8 => Ok(ImageKind::LayeredExr),
+            Some("exr") => Err(ImageKindError::ExrDepth {
+                path: path.display().to_string(),
+            }),
+            Some(e) => Err(ImageKindError::Extension {
+                path: path.display().to_string(),
+                ext: e.to_string(),
+            }),
+        }
+    }
+}
+
+/// Writes the main image of a render in `kind` to `file`, opened at `path` by
+/// [`open_output`]; `far` is the distance stored for misses in an EXR's depth.
+pub fn save_image(
+    frame: &Frame,
+    kind: ImageKind,
+    far: f32,
+    file: File,
+    path: &Path,
+) -> Result<(), OutputError> {
+    match kind {
+        ImageKind::Png8 => save_colour(frame, file, path),
+        ImageKind::Png16 => save_colour16(frame, file, path),
+        ImageKind::LayeredExr => save_layers_to(frame, far, file, path),
+    }
 }
 
 /// The file name of frame `index` of a sequence: the pattern's one run of `#` is replaced by
@@ -450,6 +524,51 @@ mod tests {
         let want = (post::srgb(post::tonemap(0.25)) * 65535.0 + 0.5) as u16;
         assert_eq!(px[0], want);
         assert_ne!(px[0] % 257, 0, "a value 8 bits could not hold");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn the_extension_and_bit_depth_choose_the_encoding_or_explain() {
+        let k = |p: &str, b| ImageKind::for_path(Path::new(p), b);
+        assert_eq!(k("a.png", 8), Ok(ImageKind::Png8));
+        assert_eq!(k("a.PNG", 16), Ok(ImageKind::Png16));
+        assert_eq!(k("frames/a", 8), Ok(ImageKind::Png8));
+        assert_eq!(k("a.exr", 8), Ok(ImageKind::LayeredExr));
+        let e = k("a.jpg", 8).unwrap_err().to_string();
+        assert!(
+            e.contains("`jpg`") && e.contains(".png") && e.contains(".exr"),
+            "{e}"
+        );
+        assert!(k("a.png", 12).unwrap_err().to_string().contains("8, 16"));
+        assert!(
+            k("a.exr", 16)
+                .unwrap_err()
+                .to_string()
+                .contains("32-bit float")
+        );
+        // Each kind writes what it says.
+        let dir = tmp("kinds");
+        for (name, kind) in [
+            ("a.png", ImageKind::Png8),
+            ("b.png", ImageKind::Png16),
+            ("c.exr", ImageKind::LayeredExr),
+        ] {
+            let path = dir.join(name);
+            save_image(&two_pixels(), kind, 9.0, open_output(&path).unwrap(), &path).unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            match kind {
+                ImageKind::LayeredExr => assert_eq!(&bytes[..4], &[0x76, 0x2f, 0x31, 0x01]),
+                _ => {
+                    let img = image::load_from_memory(&bytes).unwrap();
+                    let want = if kind == ImageKind::Png16 {
+                        image::ColorType::Rgb16
+                    } else {
+                        image::ColorType::Rgb8
+                    };
+                    assert_eq!(img.color(), want, "{name}");
+                }
+            }
+        }
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -121,6 +121,36 @@ pub fn sample(
     Ok(g)
 }
 
+/// Samples `tape`'s signed distance (world units, negative inside) at the voxel centres of a
+/// `res` grid over `bbox`, for export as a distance volume rather than a density. Escape-time
+/// estimators give 0 inside, so their interiors read 0, not a negative depth.
+pub fn sample_distance(
+    tape: &Tape,
+    res: [u32; 3],
+    bbox: WorldBox,
+    limit: u64,
+    slice_done: &(dyn Fn() + Sync),
+) -> Result<Grid<f32>, VolumeError> {
+    let mut g = Grid::<f32>::new(res, bbox, limit)?;
+    let [rx, ry, _] = res.map(|r| r as usize);
+    let size = bbox.extent() / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
+    g.data_mut()
+        .par_chunks_mut(rx * ry)
+        .enumerate()
+        .for_each_init(
+            || (Evaluator::<F32x8>::new(), vec![0.0f32; rx]),
+            |(ev, row), (z, slice)| {
+                for y in 0..ry {
+                    let p0 = bbox.min + (Vec3::new(0.0, y as f32, z as f32) + 0.5) * size;
+                    row_distances(ev, tape, p0, size.x, rx, row);
+                    slice[y * rx..(y + 1) * rx].copy_from_slice(&row[..rx]);
+                }
+                slice_done();
+            },
+        );
+    Ok(g)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,6 +181,27 @@ mod tests {
                 "smoothing makes a ramp, binary does not"
             );
         }
+    }
+
+    #[test]
+    fn distance_grids_hold_the_signed_distance_at_voxel_centres() {
+        let bbox = WorldBox::new(Vec3::splat(-1.5), Vec3::splat(1.5)).unwrap();
+        let g = sample_distance(&sphere(), [12, 10, 8], bbox, 1 << 30, &|| {}).unwrap();
+        let size = bbox.extent() / Vec3::new(12.0, 10.0, 8.0);
+        let mut inside = 0;
+        for z in 0..8 {
+            for y in 0..10 {
+                for x in 0..12 {
+                    let p = bbox.min + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * size;
+                    let got = g.data()[x + 12 * (y + 10 * z)];
+                    assert!((got - (p.length() - 1.0)).abs() < 1e-5, "{p}: {got}");
+                    inside += (got < 0.0) as usize;
+                }
+            }
+        }
+        assert!(inside > 0, "some centres are inside the sphere");
+        // Refused before allocating when over the limit.
+        assert!(sample_distance(&sphere(), [1024; 3], bbox, 1 << 20, &|| {}).is_err());
     }
 
     #[test]

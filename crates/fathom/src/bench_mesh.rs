@@ -39,7 +39,7 @@ pub struct MeshBenchArgs {
     /// Mesh only this part of the fitted bounds along z, as fractions `F0,F1` of its height
     /// (the cell size stays that of the full resolution): peak memory and throughput at a
     /// high effective resolution without meshing every layer.
-    #[arg(long, value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_delimiter = ',', num_args = 1..=2)]
     z_slab: Option<Vec<f64>>,
     /// Skip the Mandelbulber2 comparison.
     #[arg(long)]
@@ -239,6 +239,13 @@ fn mandelbulber(name: &str, res: u32) -> Result<serde_json::Value, String> {
          voxel_samples_z={res}#voxel_max_iter={iters}#voxel_image_path={}/",
         dir.display()
     );
+    // Mandelbulber 2.2x ignores `voxel_image_path` in --nogui mode and writes
+    // ~/.mandelbulber/slices/output.ply: clear it first so a stale mesh is never counted.
+    let home_ply =
+        std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".mandelbulber/slices/output.ply"));
+    if let Some(p) = &home_ply {
+        let _ = std::fs::remove_file(p);
+    }
     let t = Instant::now();
     let out = Command::new("/usr/bin/time")
         .args(["-v", "mandelbulber2", "--nogui", "--voxel", "ply", "-O", &o])
@@ -254,7 +261,11 @@ fn mandelbulber(name: &str, res: u32) -> Result<serde_json::Value, String> {
         .and_then(|l| l.rsplit(':').next())
         .and_then(|v| v.trim().parse().ok())
         .unwrap_or(0);
-    let ply = dir.join("output.ply");
+    let ply = [Some(dir.join("output.ply")), home_ply]
+        .into_iter()
+        .flatten()
+        .find(|p| p.exists())
+        .ok_or("mandelbulber2 wrote no output.ply (looked in its voxel path and ~/.mandelbulber/slices)")?;
     let header = std::fs::read(&ply).unwrap_or_default();
     let text = String::from_utf8_lossy(&header[..header.len().min(4096)]);
     let count = |el: &str| {
@@ -279,6 +290,13 @@ fn mandelbulber(name: &str, res: u32) -> Result<serde_json::Value, String> {
 pub fn run(a: MeshBenchArgs) -> Result<(), String> {
     if a.threads == 0 || a.threads > 1024 {
         return Err("--threads must be in [1, 1024]".into());
+    }
+    if let Some(f) = &a.z_slab
+        && !(f.len() == 2 && 0.0 <= f[0] && f[0] < f[1] && f[1] <= 1.0)
+    {
+        return Err(format!(
+            "--z-slab takes two fractions F0,F1 with 0 <= F0 < F1 <= 1, not {f:?}"
+        ));
     }
     if let Some(spec) = &a.single {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -305,7 +323,9 @@ pub fn run(a: MeshBenchArgs) -> Result<(), String> {
                 cmd.arg("--write").arg(w);
             }
             if let Some(f) = &a.z_slab {
-                cmd.arg("--z-slab").arg(format!("{},{}", f[0], f[1]));
+                cmd.arg("--z-slab")
+                    .arg(f[0].to_string())
+                    .arg(f[1].to_string());
             }
             let out = cmd.output().map_err(|e| e.to_string())?;
             let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|_| {

@@ -13,13 +13,14 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-/// Where frame files go: a pattern with one run of `#` (see `output::sequence_path`).
-pub fn frame_pattern(output: &Path, path_name: &str) -> PathBuf {
+/// Where frame files go: a pattern with one run of `#` (see `output::sequence_path`); a
+/// directory gets `NAME-#####.EXT` in it.
+pub fn frame_pattern(output: &Path, path_name: &str, ext: &str) -> PathBuf {
     let text = output.to_string_lossy();
     let is_dir =
         text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) || output.is_dir();
     if is_dir {
-        output.join(format!("{}-#####.png", safe_name(path_name)))
+        output.join(format!("{}-#####.{ext}", safe_name(path_name)))
     } else {
         output.to_path_buf()
     }
@@ -111,8 +112,10 @@ pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
         .prepare(&scene, Some(session.tape()))
         .map_err(|e| format!("path `{name}`: {e}"))?;
     let mut modulator = Modulator::new(&scene).map_err(|e| e.to_string())?;
+    let far = scene.render.max_distance as f32;
 
-    let pattern = frame_pattern(&a.output, name);
+    let pattern = frame_pattern(&a.output, name, "png");
+    let kind = output::ImageKind::for_path(&pattern, a.bit_depth).map_err(|e| e.to_string())?;
     // Check the naming and the directory before rendering anything.
     let last = output::sequence_path(&pattern, frames as u64 - 1)?;
     if let Some(dir) = last.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -120,6 +123,16 @@ pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
     output::open_output(&output::sequence_path(&pattern, 0)?).map_err(|e| e.to_string())?;
+    if let Some(glb) = &a.camera_path {
+        // The cameras come from the path alone, so they are written before any frame: a path
+        // glTF cannot express (an animated fov) or an unwritable file fails before the work.
+        let cameras: Vec<_> = (0..frames)
+            .map(|i| flight.sample(job.time(i, flight.duration())).camera)
+            .collect();
+        let (w, h) = job.request.output_size();
+        output::save_camera_path(&cameras, a.fps, w as f64 / h as f64, glb)
+            .map_err(|e| format!("--camera-path: {e}"))?;
+    }
 
     let bar = if a.quiet {
         indicatif::ProgressBar::hidden()
@@ -148,7 +161,8 @@ pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
             &mut |f| {
                 let file = output::sequence_path(&pattern, f.index as u64)?;
                 let out = output::open_output(&file).map_err(|e| e.to_string())?;
-                output::save_colour(&f.rendered.frame, out, &file).map_err(|e| e.to_string())?;
+                output::save_image(&f.rendered.frame, kind, far, out, &file)
+                    .map_err(|e| e.to_string())?;
                 bar.inc(1);
                 Ok(())
             },
@@ -172,6 +186,12 @@ pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
     if a.no_video || frames < 2 {
         return Ok(());
     }
+    if kind == output::ImageKind::LayeredExr {
+        if !a.quiet {
+            eprintln!("fathom: note: the frames are linear EXR layers; no video was made");
+        }
+        return Ok(());
+    }
     if !ffmpeg_available() {
         if !a.quiet {
             eprintln!(
@@ -192,6 +212,7 @@ pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use fathom_core::scene_file;
 
     fn example() -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/examples/mandelbulb-dive.ron")
@@ -253,13 +274,60 @@ mod tests {
     }
 
     #[test]
+    fn layered_exr_frames_and_a_gltf_camera_path() {
+        let dir = std::env::temp_dir().join(format!("fathom-path-exr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // The example's dive widens the fov at its end, which glTF cannot animate: refused
+        // before a frame is written.
+        let mut a = args(&dir, "dive", 3);
+        a.output = dir.join("f-##.exr");
+        a.camera_path = Some(dir.join("cam.glb"));
+        let e = crate::cmd_render::run(a).unwrap_err();
+        assert!(e.contains("--camera-path") && e.contains("fov"), "{e}");
+        assert!(!dir.join("cam.glb").exists() && !dir.join("f-01.exr").exists());
+        // The same path at one fov.
+        let mut scene = scene_file::load(&example()).unwrap();
+        for p in &mut scene.paths {
+            for k in &mut p.keys {
+                k.fov = 40.0;
+            }
+        }
+        let file = dir.join("dive.ron");
+        scene_file::save(&file, &scene).unwrap();
+        let mut a = args(&dir, "dive", 3);
+        a.scene = Some(file);
+        a.output = dir.join("f-##.exr");
+        a.camera_path = Some(dir.join("cam.glb"));
+        crate::cmd_render::run(a).unwrap();
+        for i in 0..3 {
+            let bytes = std::fs::read(dir.join(format!("f-0{i}.exr"))).unwrap();
+            assert_eq!(
+                &bytes[..4],
+                &[0x76, 0x2f, 0x31, 0x01],
+                "frame {i} is an EXR"
+            );
+        }
+        assert!(!dir.join("dive.mp4").exists(), "no video of linear frames");
+        let (doc, buffers, _) = gltf::import(dir.join("cam.glb")).unwrap();
+        let anim = doc.animations().next().unwrap();
+        let ch = anim.channels().next().unwrap();
+        let r = ch.reader(|b| Some(&buffers[b.index()]));
+        assert_eq!(r.read_inputs().unwrap().count(), 3, "one key per frame");
+        // A bad extension fails before any work.
+        let mut a = args(&dir, "dive", 2);
+        a.output = dir.join("f-##.jpg");
+        assert!(crate::cmd_render::run(a).unwrap_err().contains("`jpg`"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn frame_patterns_and_their_ffmpeg_form() {
         assert_eq!(
-            frame_pattern(Path::new("out/"), "dive in"),
+            frame_pattern(Path::new("out/"), "dive in", "png"),
             PathBuf::from("out/dive_in-#####.png")
         );
         assert_eq!(
-            frame_pattern(Path::new("shots/f-####.png"), "x"),
+            frame_pattern(Path::new("shots/f-####.png"), "x", "png"),
             PathBuf::from("shots/f-####.png")
         );
         assert_eq!(

@@ -2,11 +2,13 @@
 //! bounded memory by fathom-mesh.
 
 use clap::{Args, ValueEnum};
+use fathom_core::scene::Scene;
 use fathom_core::{Tape, presets, scene_file};
 use fathom_mesh::grid::{human_bytes, parse_bytes};
 use fathom_mesh::{MeshOptions, Method, write};
+use fathom_trace::output;
 use glam::DVec3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// How vertices are placed.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -33,6 +35,7 @@ pub enum MethodArg {
 ///   fathom mesh --preset mandelbulb -o bulb.ply --resolution 1024 --max-memory 2G
 ///   fathom mesh my.ron -o my.glb --bounds -1,-1,-1,1,1,1 --method mc
 ///   fathom mesh FILE.fract -o imported.obj --resolution 256
+///   fathom mesh docs/examples/mandelbulb-dive.ron --path dive --frames 48 -o dive-meshes/
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct MeshArgs {
@@ -69,7 +72,18 @@ pub struct MeshArgs {
     /// No progress bar or summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Mesh a sequence along the scene's flight path NAME (its parameter keys animate the
+    /// shape; docs/scene-format.md): -o is a directory (DIR/NAME-00000.ply, ...) or a pattern
+    /// such as out/f-####.stl.
+    #[arg(long, requires = "frames")]
+    pub path: Option<String>,
+    /// Meshes in the sequence, [1, 100000]; the first at the path's start, the last at its end.
+    #[arg(long, requires = "path")]
+    pub frames: Option<usize>,
 }
+
+/// Most meshes in one `--path` sequence.
+pub const MAX_MESH_FRAMES: usize = 100_000;
 
 fn parse_bounds(s: &str) -> Result<(DVec3, DVec3), String> {
     let v: Vec<f64> = s
@@ -116,19 +130,85 @@ pub fn run(a: MeshArgs) -> Result<(), String> {
         (None, Some(p)) => presets::load(p).map_err(|e| e.to_string())?,
         (None, None) => return Err("give a scene FILE or --preset NAME (see --help)".into()),
     };
-    let tape = Tape::compile(&scene).map_err(|e| e.to_string())?;
-    let o = a.options();
-    // The output is created first, so an unwritable path fails before any work.
-    let mut sink = write::create(&a.output).map_err(|e| e.to_string())?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads.unwrap_or(0))
         .build()
         .map_err(|e| e.to_string())?;
-    let plan = match pool.install(|| fathom_mesh::plan(&scene, &tape, &o)) {
+    match &a.path {
+        Some(name) => run_sequence(&a, &scene, name, &pool),
+        None => mesh_one(&a, &scene, &a.output, &pool),
+    }
+}
+
+/// `--path NAME --frames N`: one mesh per frame of the path's animation.
+fn run_sequence(
+    a: &MeshArgs,
+    scene: &Scene,
+    name: &str,
+    pool: &rayon::ThreadPool,
+) -> Result<(), String> {
+    let frames = a.frames.unwrap_or(1);
+    if frames == 0 || frames > MAX_MESH_FRAMES {
+        return Err(format!(
+            "--frames {frames} is out of range 1..={MAX_MESH_FRAMES}"
+        ));
+    }
+    let ext = a
+        .output
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "ply".into());
+    let pattern = crate::cmd_flight::frame_pattern(&a.output, name, &ext);
+    let last = output::sequence_path(&pattern, frames as u64 - 1)?;
+    if let Some(dir) = last.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    let path = scene.path(name).map_err(|e| e.to_string())?;
+    let flight = path
+        .prepare(scene, None)
+        .map_err(|e| format!("path `{name}`: {e}"))?;
+    let start = std::time::Instant::now();
+    for i in 0..frames {
+        let t = if frames > 1 {
+            flight.duration() * i as f64 / (frames - 1) as f64
+        } else {
+            0.0
+        };
+        let mut s = scene.clone();
+        flight.apply(t, &mut s);
+        let file = output::sequence_path(&pattern, i as u64)?;
+        if !a.quiet {
+            eprintln!("mesh {}/{frames} (t = {t:.3} s): {}", i + 1, file.display());
+        }
+        mesh_one(a, &s, &file, pool)?;
+    }
+    if !a.quiet {
+        eprintln!(
+            "wrote {frames} meshes of path `{name}` ({}, ...) in {:.1} s",
+            output::sequence_path(&pattern, 0)?.display(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// Meshes `scene` into `out` (format by extension).
+fn mesh_one(
+    a: &MeshArgs,
+    scene: &Scene,
+    out: &Path,
+    pool: &rayon::ThreadPool,
+) -> Result<(), String> {
+    let tape = Tape::compile(scene).map_err(|e| e.to_string())?;
+    let o = a.options();
+    // The output is created first, so an unwritable path fails before any work.
+    let mut sink = write::create(out).map_err(|e| e.to_string())?;
+    let plan = match pool.install(|| fathom_mesh::plan(scene, &tape, &o)) {
         Ok(p) => p,
         Err(e) => {
             drop(sink);
-            let _ = std::fs::remove_file(&a.output);
+            let _ = std::fs::remove_file(out);
             return Err(e.to_string());
         }
     };
@@ -160,7 +240,7 @@ pub fn run(a: MeshArgs) -> Result<(), String> {
     };
     let progress = |done: u64, _total: u64| bar.set_position(done);
     let stats = pool
-        .install(|| fathom_mesh::mesh(&scene, &tape, &plan, &o, sink.as_mut(), &progress))
+        .install(|| fathom_mesh::mesh(scene, &tape, &plan, &o, sink.as_mut(), &progress))
         .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
     if stats.missing_faces > 0 {
@@ -171,10 +251,10 @@ pub fn run(a: MeshArgs) -> Result<(), String> {
         );
     }
     if !a.quiet {
-        let size = std::fs::metadata(&a.output).map(|m| m.len()).unwrap_or(0);
+        let size = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
         eprintln!(
             "wrote {} ({} triangles, {} vertices, {}) in {:.1} s: {:.2} M triangles/s, {} of {} bricks meshed",
-            a.output.display(),
+            out.display(),
             stats.triangles,
             stats.vertices,
             human_bytes(size),
@@ -190,6 +270,7 @@ pub fn run(a: MeshArgs) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use fathom_core::flight::{FlightPath, Keyframe};
 
     fn args(out: &str) -> MeshArgs {
         MeshArgs {
@@ -204,7 +285,50 @@ mod tests {
             no_colours: false,
             threads: Some(1),
             quiet: true,
+            path: None,
+            frames: None,
         }
+    }
+
+    #[test]
+    fn a_flight_path_gives_a_mesh_sequence_whose_shape_follows_the_parameters() {
+        let dir = std::env::temp_dir().join(format!("fathom-mesh-seq-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // The bulb's power animates from 8 to 3 along the path `morph`.
+        let mut scene = presets::load("mandelbulb").unwrap();
+        let mut keys = vec![Keyframe::from_camera(&scene.camera); 2];
+        keys[0].params.insert("root.shape.power".into(), 8.0);
+        keys[1].params.insert("root.shape.power".into(), 3.0);
+        scene.paths.push(FlightPath::new("morph", 2.0, keys));
+        let file = dir.join("morph.ron");
+        scene_file::save(&file, &scene).unwrap();
+        let mut a = args("");
+        a.preset = None;
+        a.scene = Some(file);
+        a.output = dir.join("bulb-##.stl");
+        a.resolution = 20;
+        a.path = Some("morph".into());
+        a.frames = Some(3);
+        run(a).unwrap();
+        let tris: Vec<u64> = (0..3)
+            .map(|i| {
+                let b = std::fs::read(dir.join(format!("bulb-0{i}.stl"))).unwrap();
+                let n = u32::from_le_bytes(b[80..84].try_into().unwrap()) as u64;
+                assert_eq!(b.len() as u64, 84 + 50 * n, "frame {i} is a whole STL");
+                n
+            })
+            .collect();
+        assert!(tris.iter().all(|&n| n > 100), "{tris:?}");
+        assert_ne!(tris[0], tris[2], "the path's power key changes the shape");
+        let mut bad = args(dir.join("x.ply").to_str().unwrap());
+        bad.path = Some("nope".into());
+        bad.frames = Some(2);
+        assert!(run(bad).unwrap_err().contains("has no paths"));
+        let mut bad = args(dir.join("x.ply").to_str().unwrap());
+        bad.path = Some("morph".into());
+        bad.frames = Some(0);
+        assert!(run(bad).unwrap_err().contains("--frames 0"));
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

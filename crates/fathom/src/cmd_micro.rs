@@ -284,3 +284,86 @@ pub fn run(a: MicroArgs) -> Result<(), String> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::FromArgMatches;
+
+    fn args(list: &[&str]) -> MicroArgs {
+        let cmd = MicroArgs::augment_args(clap::Command::new("micro"));
+        let m = cmd
+            .try_get_matches_from(std::iter::once("micro").chain(list.iter().copied()))
+            .unwrap_or_else(|e| panic!("{list:?}: {e}"));
+        MicroArgs::from_arg_matches(&m).unwrap()
+    }
+
+    fn tmp(name: &str) -> String {
+        let d = std::env::temp_dir().join(format!("fathom-cmd-micro-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d.join(name).display().to_string()
+    }
+
+    #[test]
+    fn a_demo_renders_with_its_side_outputs() {
+        let (out, mask, stats) = (tmp("t.png"), tmp("t-mask.png"), tmp("t.json"));
+        let a = args(&[
+            "--demo",
+            "teapot",
+            "--size",
+            "48x36",
+            "--threads",
+            "2",
+            "--quiet",
+            "-o",
+            &out,
+            "--mask",
+            &mask,
+            "--stats",
+            &stats,
+        ]);
+        run(a).unwrap();
+        let img = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (48, 36));
+        let m = image::open(&mask).unwrap().to_luma8();
+        let hits = m.pixels().filter(|p| p.0[0] > 127).count();
+        assert!(
+            hits > 100 && hits < 48 * 36,
+            "the teapot covers part of the view ({hits} of {} pixels)",
+            48 * 36
+        );
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert!(j.to_string().contains("tetrahedra"), "{j}");
+    }
+
+    #[test]
+    fn bad_input_gives_clear_errors_and_writes_nothing() {
+        let out = tmp("bad.png");
+        let cases: Vec<(Vec<&str>, &str)> = vec![
+            (vec!["--demo", "kettle"], "teapot"),
+            (vec!["--demo", "teapot", "--shell=-1"], "shell"),
+            (vec!["--demo", "teapot", "--period", "0"], "period"),
+            (
+                vec!["--demo", "teapot", "--bake", "1"],
+                "out of range [2, 512]",
+            ),
+            (
+                vec!["/nonexistent/mesh.obj", "--preset", "menger"],
+                "/nonexistent/mesh.obj",
+            ),
+            (vec!["--cloud", "fern", "--gpu"], "CPU only"),
+        ];
+        for (list, want) in cases {
+            std::fs::remove_file(&out).ok();
+            let mut full = list.clone();
+            full.extend(["--size", "32x24", "--quiet", "-o", &out]);
+            let e = run(args(&full)).expect_err(&format!("{list:?} should fail"));
+            assert!(e.contains(want), "{list:?}: `{e}` should mention `{want}`");
+            assert!(
+                !std::path::Path::new(&out).exists() || std::fs::metadata(&out).unwrap().len() == 0,
+                "{list:?} left an image behind"
+            );
+        }
+    }
+}

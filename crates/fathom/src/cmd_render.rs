@@ -33,7 +33,14 @@ pub enum TracerKind {
 ///   fathom render --preset mandelbulb --gpu -o gpu.png
 ///   fathom render --preset mandelbulb --gpu --stereo ods --size 2048x1024 -o vr.png
 ///   fathom render --preset menger --stereo sbs --size 640x480 -o pair.png
+///   fathom render --preset mandelbulb -o layers.exr          colour, mask, depth, normal, id
+///   fathom render --preset mandelbulb --bit-depth 16 -o deep.png
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 -o dive/
+///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 \
+///       -o shots/dive-####.exr --camera-path shots/dive.glb
+///   fathom render --preset menger --size 8192x8192 --tiles 64 --shard 3/64 -o poster/
+///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 --shard 0/8 -o dive/
+///   (farm shards: see `fathom farm --help`; then `fathom farm assemble poster/ -o poster.png`)
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct RenderArgs {
@@ -42,9 +49,13 @@ pub struct RenderArgs {
     /// Built-in preset (see `fathom list presets`).
     #[arg(long, conflicts_with = "scene")]
     pub preset: Option<String>,
-    /// Output PNG.
+    /// Output image: .png (tonemapped sRGB, 8 or 16 bits, see --bit-depth) or .exr (layers
+    /// for compositing: linear R G B, A mask, Z depth, normal.X/Y/Z, id material).
     #[arg(short, long, default_value = "fathom.png")]
     pub output: PathBuf,
+    /// Bits per channel of a PNG output: 8 or 16.
+    #[arg(long, default_value_t = 8)]
+    pub bit_depth: u8,
     /// Image size WIDTHxHEIGHT, each side at most 16384 and at most 64 Mpixel in all.
     #[arg(long, default_value = "1280x720", value_parser = parse_size)]
     pub size: (u32, u32),
@@ -120,6 +131,21 @@ pub struct RenderArgs {
     /// Do not make a video from a path's frames even when ffmpeg is on PATH.
     #[arg(long)]
     pub no_video: bool,
+    /// With --path: also write the frames' cameras as a glTF animation (.glb), so Blender and
+    /// other tools can match the rendered sequence (a path that animates the fov is refused:
+    /// glTF cannot animate it).
+    #[arg(long, requires = "path")]
+    pub camera_path: Option<PathBuf>,
+    /// Render farm: cut the still into N tiles, units of a farm job in the directory -o DIR
+    /// (with --shard, only that shard's tiles; else all, or the Slurm array task's share).
+    #[arg(long, value_name = "N", conflicts_with = "path")]
+    pub tiles: Option<usize>,
+    /// Render farm: render shard I of N of the job's units (tiles with --tiles, frames with
+    /// --path) into the job directory -o DIR; units already done are skipped. Without a
+    /// value: from SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT. Assemble the result with
+    /// `fathom farm assemble DIR`.
+    #[arg(long, value_name = "I/N", num_args = 0..=1, default_missing_value = "")]
+    pub shard: Option<String>,
 }
 
 /// Which renderer `fathom render` uses.
@@ -143,7 +169,7 @@ pub enum StereoKind {
 }
 
 /// Loads the scene named by the arguments and applies the camera overrides.
-fn load_scene(a: &RenderArgs) -> Result<Scene, String> {
+pub(crate) fn load_scene(a: &RenderArgs) -> Result<Scene, String> {
     let mut scene = match (&a.scene, &a.preset) {
         (Some(path), _) => scene_file::load(path).map_err(|e| e.to_string())?,
         (None, Some(p)) => presets::load(p).map_err(|e| e.to_string())?,
@@ -261,11 +287,15 @@ fn progress_bar(quiet: bool) -> Result<indicatif::ProgressBar, String> {
 }
 
 pub fn run(a: RenderArgs) -> Result<(), String> {
+    if a.shard.is_some() || a.tiles.is_some() {
+        return crate::cmd_farm::render_shard(&a);
+    }
     if a.path.is_some() {
         let scene = load_scene(&a)?;
         return crate::cmd_flight::run(&a, scene);
     }
     let req = a.request()?;
+    let kind = output::ImageKind::for_path(&a.output, a.bit_depth).map_err(|e| e.to_string())?;
     let scene = load_scene(&a)?;
     // Open every output before rendering, so a bad path fails fast.
     let out = output::open_output(&a.output).map_err(|e| e.to_string())?;
@@ -294,7 +324,7 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
         eprintln!("fathom: note: {note}");
     }
     let frame = &r.frame;
-    output::save_colour(frame, out, &a.output).map_err(|e| e.to_string())?;
+    output::save_image(frame, kind, far, out, &a.output).map_err(|e| e.to_string())?;
     if let Some((f, p)) = mask {
         output::save_mask(frame, f, p).map_err(|e| e.to_string())?;
     }
@@ -450,6 +480,27 @@ mod tests {
         let stats: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(p("s.json")).unwrap()).unwrap();
         assert_eq!(stats["primary_rays"], 24 * 16);
+        // The main image as layered EXR and as 16-bit PNG.
+        run(args(p("l.exr").to_str().unwrap(), (24, 16))).unwrap();
+        assert_eq!(
+            &std::fs::read(p("l.exr")).unwrap()[..4],
+            &[0x76, 0x2f, 0x31, 0x01]
+        );
+        let mut a = args(p("c16.png").to_str().unwrap(), (24, 16));
+        a.bit_depth = 16;
+        run(a).unwrap();
+        let deep = image::open(p("c16.png")).unwrap();
+        assert_eq!(deep.color(), image::ColorType::Rgb16);
+        let eight = image::open(p("c.png")).unwrap().to_rgb8();
+        let same = deep
+            .to_rgb16()
+            .pixels()
+            .zip(eight.pixels())
+            .all(|(d, e)| (0..3).all(|k| (d.0[k] as f32 / 257.0 - e.0[k] as f32).abs() <= 1.0));
+        assert!(
+            same,
+            "the 16-bit image is the 8-bit one with more precision"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 

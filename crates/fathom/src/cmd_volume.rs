@@ -29,6 +29,15 @@ pub enum BoundaryArg {
     Walls,
 }
 
+/// What `--export` writes for a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ExportField {
+    /// The density that is rendered (1 inside, or the --smooth ramp).
+    Density,
+    /// The signed distance at each voxel centre (world units, negative inside); export only.
+    Distance,
+}
+
 /// Majorant choice on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
 pub enum MajorantArg {
@@ -184,6 +193,11 @@ pub struct VolumeArgs {
     /// Write the density grid: .vol (Mitsuba 3) or .raw (fathom; trail counts when simulated).
     #[arg(long)]
     pub export: Option<PathBuf>,
+    /// What --export writes for a scene (--scene or --preset): `density` or `distance` (signed
+    /// distances in world units at voxel centres, negative inside, the world box in the .vol
+    /// header; for tools that take distance grids; export only, no image).
+    #[arg(long, value_enum, default_value = "density")]
+    pub export_field: ExportField,
     /// Write render (and simulation) statistics as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
@@ -365,6 +379,9 @@ pub fn run(a: VolumeArgs) -> Result<(), String> {
     render::check_spp(a.spp).map_err(|e| e.to_string())?;
     let limit = crate::args::parse_bytes(&a.max_memory)? as u64;
     let src = source(&a)?;
+    if a.export_field == ExportField::Distance {
+        return export_distance(&a, src, limit);
+    }
     let params = medium_params(&a)?;
     params.validate().map_err(|e| e.to_string())?;
     let (environment, sun) = lighting(&a)?;
@@ -393,6 +410,68 @@ pub fn run(a: VolumeArgs) -> Result<(), String> {
             limit,
         )
     })
+}
+
+/// `--export-field distance`: the scene's signed distance sampled into a `.vol` grid.
+fn export_distance(a: &VolumeArgs, src: Source, limit: u64) -> Result<(), String> {
+    let Source::Fractal {
+        scene, res, bbox, ..
+    } = src
+    else {
+        return Err(
+            "--export-field distance samples a scene: give --scene FILE or --preset NAME".into(),
+        );
+    };
+    let Some(path) = &a.export else {
+        return Err("--export-field distance needs --export FILE.vol".into());
+    };
+    if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vol"))
+    {
+        return Err(format!(
+            "{}: a distance grid is written as .vol (Mitsuba 3's grid format)",
+            path.display()
+        ));
+    }
+    if a.output.is_some() {
+        return Err(
+            "--export-field distance only exports: a distance grid is not a density to render \
+             (leave out -o, or export the density)"
+                .into(),
+        );
+    }
+    let tape = fathom_core::Tape::compile(&scene).map_err(|e| e.to_string())?;
+    let bbox = match bbox {
+        Some(b) => b,
+        None => fathom_volume::fractal::fit_box(&tape).map_err(|e| e.to_string())?,
+    };
+    std::fs::File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| e.to_string())?;
+    let pb = bar(a.quiet, res as u64, "distance");
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let grid = pool
+        .install(|| {
+            fathom_volume::fractal::sample_distance(&tape, [res; 3], bbox, limit, &|| {
+                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                pb.set_position(d);
+            })
+        })
+        .map_err(|e| e.to_string())?;
+    pb.finish_and_clear();
+    fathom_volume::vol_file::write(path, &grid).map_err(|e| e.to_string())?;
+    if !a.quiet {
+        eprintln!(
+            "volume: wrote the signed distance on a {res}^3 grid over {:?} .. {:?} to {}",
+            bbox.min.to_array(),
+            bbox.max.to_array(),
+            path.display()
+        );
+    }
+    Ok(())
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -521,6 +600,73 @@ mod tests {
         let d = std::env::temp_dir().join(format!("fathom-cmd-volume-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         d.join(name).display().to_string()
+    }
+
+    #[test]
+    fn a_scene_exports_its_signed_distance_as_a_vol_grid() {
+        let vol = tmp("sdf.vol");
+        run(args(&[
+            "--preset",
+            "menger",
+            "--grid",
+            "12",
+            "--box",
+            "-1.5,-1.5,-1.5,1.5,1.5,1.5",
+            "--export",
+            &vol,
+            "--export-field",
+            "distance",
+            "--quiet",
+        ]))
+        .unwrap();
+        let bytes = std::fs::read(&vol).unwrap();
+        assert_eq!(&bytes[..4], b"VOL\x03");
+        let header = 48;
+        assert_eq!(bytes.len(), header + 12 * 12 * 12 * 4);
+        let values: Vec<f32> = bytes[header..]
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        // The sponge spans [-1, 1]^3: the corner voxel (centre -1.375) is outside, the one
+        // nearest the centre of a face is inside the solid frame; the grid matches the tape.
+        let tape = fathom_core::Tape::compile(&presets::load("menger").unwrap()).unwrap();
+        let mut ev = fathom_core::Evaluator::<f64>::new();
+        for (i, v) in values.iter().enumerate() {
+            let c = |k: usize| -1.5 + (k as f64 + 0.5) * 0.25;
+            let p = fathom_core::V3::new(c(i % 12), c(i / 12 % 12), c(i / 144));
+            let want = ev.distance(&tape, p);
+            assert!((*v as f64 - want).abs() < 1e-4, "voxel {i}: {v} vs {want}");
+        }
+        assert!(values[0] > 0.0 && values.iter().any(|v| *v < 0.0));
+        // What it refuses.
+        for (list, want) in [
+            (vec!["--sim", "physarum", "--grid", "8"], "samples a scene"),
+            (vec!["--preset", "menger", "--grid", "8"], "needs --export"),
+            (
+                vec![
+                    "--preset", "menger", "--grid", "8", "--export", &vol, "-o", "x.png",
+                ],
+                "only exports",
+            ),
+        ] {
+            let mut full = list.clone();
+            full.extend(["--export-field", "distance", "--quiet"]);
+            let e = run(args(&full)).unwrap_err();
+            assert!(e.contains(want), "{list:?}: {e}");
+        }
+        let raw = tmp("sdf.raw");
+        let e = run(args(&[
+            "--preset",
+            "menger",
+            "--grid",
+            "8",
+            "--export",
+            &raw,
+            "--export-field",
+            "distance",
+        ]))
+        .unwrap_err();
+        assert!(e.contains(".vol"), "{e}");
     }
 
     #[test]

@@ -68,6 +68,15 @@ pub struct MicroGpu {
     counters: wgpu::Buffer,
     tape: Option<(wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, Vec<u32>)>,
     shell: Option<ShellBuffers>,
+    uploads: TapeUploads,
+}
+
+/// How texture tapes reached the device: whole new buffers (a new instruction stream) or a
+/// rewrite of the parameter and material buffers only (an animation frame).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TapeUploads {
+    pub tapes_created: u64,
+    pub params_rewritten: u64,
 }
 
 fn entry(
@@ -218,7 +227,13 @@ impl MicroGpu {
             counters,
             tape: None,
             shell: None,
+            uploads: TapeUploads::default(),
         })
+    }
+
+    /// How many texture tapes were uploaded whole and how many only rewrote parameters.
+    pub fn tape_uploads(&self) -> TapeUploads {
+        self.uploads
     }
 
     /// Whether the adapter is a CPU implementation (its timings are CPU timings).
@@ -293,6 +308,7 @@ impl MicroGpu {
             self.gpu
                 .queue
                 .write_buffer(m, 0, bytemuck::cast_slice(&mats));
+            self.uploads.params_rewritten += 1;
             return Ok(());
         }
         use wgpu::BufferUsages as U;
@@ -315,6 +331,7 @@ impl MicroGpu {
             format!("the material table ({} materials)", mats.len() / 8),
         )?;
         self.tape = Some((i, p, m, words));
+        self.uploads.tapes_created += 1;
         Ok(())
     }
 
