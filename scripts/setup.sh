@@ -21,7 +21,12 @@ have ffmpeg || need+=(ffmpeg)
 for p in slurmctld slurmd slurm-client munge; do
   have "$p" || need+=("$p")
 done
-# (window tests add their packages here: xvfb ...)
+# The window smoke test (crates/fathom/tests/window_smoke.rs) runs the real explorer window on
+# a virtual X server: xvfb-run starts Xvfb (with an xauth cookie) for the one command and
+# stops it afterwards.
+for p in xvfb xauth; do
+  have "$p" || need+=("$p")
+done
 
 if [ ${#need[@]} -gt 0 ]; then
   echo "setup: installing ${need[*]}"

@@ -216,6 +216,19 @@ impl Session {
                         );
                         r
                     }
+                    // A tape or an image this device cannot hold: the CPU tracer has no such
+                    // limits, so the frame is rendered there and the note says why.
+                    Err(
+                        e @ (fathom_gpu::GpuError::BufferTooLarge { .. }
+                        | fathom_gpu::GpuError::ImageTooLarge { .. }),
+                    ) => {
+                        let pool = pool(&mut self.pool, req.threads)?;
+                        let mut r = trace(&self.tape, &scene, camera, req, control, pool)?;
+                        r.stats.note = Some(format!(
+                            "this scene does not fit the GPU's limits ({e}); rendered on the CPU"
+                        ));
+                        r
+                    }
                     r => r?,
                 }
             }

@@ -279,3 +279,73 @@ fn the_gpu_falls_back_to_the_cpu_past_f32_precision_and_says_so() {
     assert!(r.stats.deep_f64_path);
     assert!(r.stats.note.unwrap().contains("f32 precision"));
 }
+
+#[test]
+fn a_scene_too_large_for_the_device_falls_back_to_the_cpu_and_says_so() {
+    // A device whose storage buffers hold 64 KiB: 4096 tape instructions, and a G-buffer of
+    // about 1300 pixels.
+    const STORAGE: u64 = 64 << 10;
+    let gpu = fathom_gpu::Gpu::headless_vulkan_limited(|l| {
+        l.max_storage_buffer_binding_size = STORAGE;
+    })
+    .expect("lavapipe (scripts/setup.sh)");
+    // The image is too large for the G-buffer: rendered on the CPU, equal to the CPU's frame.
+    let scene = presets::load("menger").unwrap();
+    let cam = scene.camera.clone();
+    let mut s = Session::new(scene).unwrap();
+    s.set_gpu(fathom_gpu::Renderer::new(gpu).unwrap());
+    let req = RenderRequest {
+        backend: Backend::Gpu,
+        ..request(64, 48)
+    };
+    let r = s.render(&cam, &req).unwrap();
+    assert_eq!(r.stats.renderer, "trace");
+    let note = r.stats.note.unwrap();
+    assert!(
+        note.contains("does not fit") && note.contains("G-buffer"),
+        "{note}"
+    );
+    let cpu = s
+        .render(
+            &cam,
+            &RenderRequest {
+                backend: Backend::Trace,
+                ..req.clone()
+            },
+        )
+        .unwrap();
+    assert!(r.frame == cpu.frame);
+    // A small image of the same scene still renders on the GPU.
+    let r = s.render(&cam, &request_gpu(16, 12)).unwrap();
+    assert_eq!(r.stats.renderer, "gpu");
+    assert!(r.stats.note.is_none());
+
+    // A tape longer than the instruction buffer: every frame on the CPU, with the reason.
+    let mut root = fathom_core::scene::Node::new(fathom_core::primitives::Primitive::Sphere);
+    for i in 0..1000 {
+        root.children.push(
+            fathom_core::scene::Node::new(fathom_core::primitives::Primitive::Sphere)
+                .combine(fathom_core::combine::Combine::Union),
+        );
+        root.children[i].ops.push(fathom_core::scene::Call {
+            kind: fathom_core::scene::DomainOp::Transform(
+                fathom_core::transforms::Transform::Translate,
+            ),
+            params: vec![i as f64 * 0.01, 0.0, 0.0],
+        });
+    }
+    let mut big = fathom_core::scene::Scene::new(root);
+    big.camera.eye = glam::DVec3::new(0.0, 0.5, 4.0);
+    s.set_scene(big.clone()).unwrap();
+    let r = s.render(&big.camera, &request_gpu(16, 12)).unwrap();
+    assert_eq!(r.stats.renderer, "trace");
+    let note = r.stats.note.unwrap();
+    assert!(note.contains("the tape"), "{note}");
+}
+
+fn request_gpu(w: u32, h: u32) -> RenderRequest {
+    RenderRequest {
+        backend: Backend::Gpu,
+        ..request(w, h)
+    }
+}

@@ -380,7 +380,9 @@ pub fn run(mut a: RenderArgs) -> Result<(), String> {
 
 /// What `fathom` with no arguments does: render the default preset to ./fathom.png at
 /// 1280x720 and say where it went.
-pub fn run_default() -> Result<(), String> {
+/// `fathom` with no arguments and no window: renders the default preset to fathom.png and
+/// says so, with `why_no_window` (why the explorer window did not open).
+pub fn run_default(why_no_window: Option<&str>) -> Result<(), String> {
     let start = Instant::now();
     let a = RenderArgs {
         output: PathBuf::from("fathom.png"),
@@ -396,6 +398,9 @@ pub fn run_default() -> Result<(), String> {
         shown.display(),
         start.elapsed().as_secs_f64()
     );
+    if let Some(why) = why_no_window {
+        println!("the explorer window did not open ({why}); `fathom explore` opens it");
+    }
     Ok(())
 }
 

@@ -12,6 +12,7 @@ use std::process::ExitCode;
 mod args;
 mod bench;
 mod bench_eval;
+mod bench_explore;
 mod bench_farm;
 mod bench_gpu;
 mod bench_live;
@@ -87,8 +88,7 @@ pub fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        None if fathom_app::display_available() => cmd_explore::run(crate::clap_defaults()),
-        None => cmd_render::run_default(),
+        None => cmd_explore::run_without_arguments(),
         Some(Command::Render(a)) => cmd_render::run(*a),
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
