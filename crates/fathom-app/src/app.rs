@@ -81,6 +81,9 @@ pub struct ViewSettings {
     pub stereo: Stereo,
     pub eye_separation: f64,
     pub fidelity: f64,
+    /// Density grid, extinction, albedo and samples of the volume renderer (the scene as a
+    /// cloud).
+    pub volume: fathom_render::request::VolumeSettings,
 }
 
 impl ViewSettings {
@@ -103,6 +106,7 @@ impl ViewSettings {
             ..RenderRequest::default()
         };
         r.octree.fidelity = self.fidelity;
+        r.volume = self.volume.clone();
         r
     }
 }
@@ -233,6 +237,7 @@ impl ExplorerApp {
                 stereo: Stereo::Mono,
                 eye_separation: 0.065,
                 fidelity: 1.0,
+                volume: Default::default(),
             },
             viewport: Viewport::new(opts.target_ms),
             worker,
@@ -857,11 +862,17 @@ impl ExplorerApp {
                 Backend::Trace => "CPU tracer",
                 Backend::Gpu => "GPU tracer",
                 Backend::Octree => "octree",
+                Backend::Volume => "volume (cloud)",
             })
             .show_ui(ui, |ui| {
                 ui.selectable_value(&mut s.backend, Backend::Trace, "CPU tracer");
                 ui.selectable_value(&mut s.backend, Backend::Gpu, "GPU tracer");
                 ui.selectable_value(&mut s.backend, Backend::Octree, "octree");
+                ui.selectable_value(&mut s.backend, Backend::Volume, "volume (cloud)")
+                    .on_hover_text(
+                        "the scene's interior as a cloud, path-traced (fathom-volume); \
+                         refines while the view is still",
+                    );
             });
         ui.horizontal(|ui| {
             ui.label("step rule");
@@ -877,6 +888,18 @@ impl ExplorerApp {
                     .text("voxel size (px)"),
             );
         }
+        if s.backend == Backend::Volume {
+            let v = &mut s.volume;
+            ui.add(egui::Slider::new(&mut v.grid, 16..=256).text("density grid"));
+            ui.add(
+                egui::Slider::new(&mut v.density_scale, 0.1..=200.0)
+                    .logarithmic(true)
+                    .text("extinction"),
+            );
+            ui.add(egui::Slider::new(&mut v.albedo, 0.0..=1.0).text("albedo"));
+            ui.add(egui::Slider::new(&mut v.g, -0.95..=0.95).text("anisotropy g"));
+            ui.add(egui::Slider::new(&mut v.spp, 1..=64).text("samples per frame"));
+        }
         ui.horizontal(|ui| {
             ui.label("stereo");
             ui.selectable_value(&mut s.stereo, Stereo::Mono, "mono");
@@ -890,7 +913,7 @@ impl ExplorerApp {
                     .text("eye separation"),
             );
         }
-        if s.backend == Backend::Octree && s.stereo != Stereo::Mono {
+        if matches!(s.backend, Backend::Octree | Backend::Volume) && s.stereo != Stereo::Mono {
             s.stereo = Stereo::Mono;
         }
         let mut target = self.viewport.scale.target_ms();
@@ -1081,6 +1104,7 @@ impl ExplorerApp {
             stereo,
             backend: match self.settings.backend {
                 Backend::Octree => Backend::Octree,
+                Backend::Volume => Backend::Volume,
                 _ => Backend::Trace,
             },
             ..self.settings.clone()

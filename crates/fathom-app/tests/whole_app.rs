@@ -301,3 +301,41 @@ fn faults_recover_a_zero_sized_viewport_an_out_of_range_value_and_a_panicked_wor
     settle(&mut h);
     assert_viewport_is_offline_render(&mut h);
 }
+
+#[test]
+fn the_volume_renderer_refines_to_the_offline_cloud() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut h = harness("menger");
+    settle(&mut h);
+    // The renderer picker's "volume (cloud)": the scene's interior path-traced as a cloud.
+    {
+        let app = h.state_mut();
+        app.settings.backend = Backend::Volume;
+        app.settings.volume.grid = 32;
+        app.settings.volume.spp = 4;
+    }
+    // The whole viewport, without panels and overlay (F2, F3).
+    h.key_press(egui::Key::F2);
+    h.key_press(egui::Key::F3);
+    h.step();
+    settle(&mut h);
+    let shown = h.state().viewport.shown.as_ref().unwrap().request.clone();
+    assert_eq!(shown.backend, Backend::Volume);
+    // The path tracer's streams are fixed per pixel and sample, so the refined viewport is
+    // the offline render itself (same tolerance as the tracer's).
+    let (w, ht, cloud) = assert_viewport_is_offline_render(&mut h);
+    let solid = {
+        let mut req = h.state().settings.base_request();
+        req.backend = Backend::Trace;
+        req.width = w;
+        req.height = ht;
+        let mut s = Session::new(h.state().scene.clone()).unwrap();
+        let r = s.render(&h.state().view_camera(), &req).unwrap();
+        fathom_trace::post::to_rgb8(&r.frame)
+    };
+    let (_, over) = compare(w, ht, &solid, &cloud);
+    assert!(
+        over > (w * ht / 20) as usize,
+        "the cloud differs from the solid render in only {over} channels"
+    );
+}

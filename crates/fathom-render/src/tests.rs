@@ -349,3 +349,54 @@ fn request_gpu(w: u32, h: u32) -> RenderRequest {
         ..request(w, h)
     }
 }
+
+#[test]
+fn the_volume_backend_draws_the_scene_as_a_cloud_and_resamples_only_on_edits() {
+    let scene = presets::load("menger").unwrap();
+    let cam = scene.camera.clone();
+    let mut s = Session::new(scene.clone()).unwrap();
+    let mut req = RenderRequest {
+        backend: Backend::Volume,
+        ..request(24, 18)
+    };
+    req.volume.grid = 24;
+    req.volume.spp = 2;
+    let whole = s.render(&cam, &req).unwrap();
+    assert_eq!(whole.stats.renderer, "volume");
+    assert_eq!(s.counters().volumes_sampled, 1);
+    let f = &whole.frame;
+    let lum = |x: u32, y: u32| f.colour[(y * f.width + x) as usize].iter().sum::<f32>();
+    let (centre, corner) = (lum(12, 9), lum(0, 0));
+    assert!(
+        centre.is_finite() && corner > 0.0 && (centre - corner).abs() > 0.05 * corner,
+        "the cloud stands out from the sky: centre {centre}, corner {corner}"
+    );
+    // Deterministic per pixel and sample: regions are crops, and the grid is kept.
+    for r in grid(24, 18).into_iter().step_by(4) {
+        req.region = Some(r);
+        assert!(s.render(&cam, &req).unwrap().frame == f.crop(r), "{r:?}");
+    }
+    req.region = None;
+    assert_eq!(s.counters().volumes_sampled, 1);
+    // Supersampling is more samples per pixel: a different (less noisy) estimate.
+    req.supersample = 2;
+    let refined = s.render(&cam, &req).unwrap();
+    assert!(refined.frame != *f);
+    assert_eq!(s.counters().volumes_sampled, 1);
+    // A parameter edit changes the shape: the grid is sampled again.
+    let mut edited = scene.clone();
+    edited.root.shape.params[0] -= 1.0; // one iteration fewer
+    s.set_scene(edited).unwrap();
+    s.render(&cam, &req).unwrap();
+    assert_eq!(s.counters().volumes_sampled, 2);
+    // What the volume renderer refuses, by name.
+    req.projection = Projection::SideBySide {
+        eye_separation: 0.1,
+    };
+    let e = s.render(&cam, &req).unwrap_err().to_string();
+    assert!(e.contains("volume renderer"), "{e}");
+    req.projection = Projection::Mono;
+    req.volume.grid = 1;
+    let e = s.render(&cam, &req).unwrap_err().to_string();
+    assert!(e.contains("grid = 1") && e.contains("[2, 512]"), "{e}");
+}

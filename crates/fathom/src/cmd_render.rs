@@ -158,6 +158,9 @@ pub enum RendererKind {
     Gpu,
     /// The sparse voxel octree, subdivided until settled at the view.
     Svo,
+    /// The scene's interior as a cloud, path-traced (fathom-volume at its session defaults;
+    /// `fathom volume` has every setting). --supersample S renders 2 S^2 samples per pixel.
+    Volume,
 }
 
 /// Stereo layout.
@@ -232,9 +235,13 @@ impl RenderArgs {
             (true, RendererKind::Svo) => {
                 return Err("--gpu and --renderer svo choose two renderers; pick one".into());
             }
+            (true, RendererKind::Volume) => {
+                return Err("--gpu and --renderer volume choose two renderers; pick one".into());
+            }
             (true, _) | (false, RendererKind::Gpu) => Backend::Gpu,
             (false, RendererKind::Trace) => Backend::Trace,
             (false, RendererKind::Svo) => Backend::Octree,
+            (false, RendererKind::Volume) => Backend::Volume,
         })
     }
 
