@@ -869,10 +869,10 @@ impl ExplorerApp {
         let mut action = None;
         egui::Panel::bottom("live")
             .resizable(true)
-            .default_size(110.0)
+            .default_size(160.0)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    ui.collapsing("Timeline", |ui| {
+                    egui::CollapsingHeader::new("Timeline").default_open(true).show(ui, |ui| {
                         action = live::timeline_ui(
                             ui,
                             &mut self.live,
@@ -881,7 +881,7 @@ impl ExplorerApp {
                             &self.tape,
                         );
                     });
-                    ui.collapsing("Bindings", |ui| {
+                    egui::CollapsingHeader::new("Bindings").default_open(true).show(ui, |ui| {
                         live::bindings_ui(ui, &self.live, &self.scene);
                     });
                 });

@@ -31,9 +31,15 @@ const SETTLE: Duration = Duration::from_secs(180);
 
 fn harness(preset: &str) -> Harness<'static, ExplorerApp> {
     let scene = presets::load(preset).unwrap();
-    let opts = ExploreOptions::new(scene, format!("preset {preset}"));
+    harness_with(
+        ExploreOptions::new(scene, format!("preset {preset}")),
+        egui::vec2(320.0, 240.0),
+    )
+}
+
+fn harness_with(opts: ExploreOptions, size: egui::Vec2) -> Harness<'static, ExplorerApp> {
     Harness::builder()
-        .with_size(egui::vec2(320.0, 240.0))
+        .with_size(size)
         .with_pixels_per_point(1.0)
         // The synthetic mouse cursor would be drawn over the viewport.
         .with_render_cursor(false)
@@ -300,4 +306,255 @@ fn faults_recover_a_zero_sized_viewport_an_out_of_range_value_and_a_panicked_wor
     h.run_steps(2);
     settle(&mut h);
     assert_viewport_is_offline_render(&mut h);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Live modulation and flight paths in the window (issue 12).
+
+/// A binding read from its scene-file form.
+fn binding(text: &str) -> fathom_core::binding::Binding {
+    ron::from_str(text).unwrap()
+}
+
+/// Steps the window until `done` holds (at most [`SETTLE`]); returns the frames stepped.
+fn step_until(
+    h: &mut Harness<'static, ExplorerApp>,
+    what: &str,
+    done: impl Fn(&ExplorerApp) -> bool,
+) -> u64 {
+    let start = Instant::now();
+    let mut frames = 0;
+    while !done(h.state()) {
+        assert!(
+            start.elapsed() < SETTLE,
+            "{what}: not within {SETTLE:?}; notes: {:?}",
+            h.state().notes()
+        );
+        h.step();
+        frames += 1;
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    frames
+}
+
+/// The first bound value of the frame on screen, and the viewport's mean level (of 255),
+/// read so that both belong to the same frame.
+fn shown_value_and_mean(h: &mut Harness<'static, ExplorerApp>) -> (f64, f64) {
+    loop {
+        let before = h.state().shown_values().and_then(|v| v[0]);
+        let (_, _, px) = viewport_pixels(h);
+        let after = h.state().shown_values().and_then(|v| v[0]);
+        if let (Some(a), Some(b)) = (before, after)
+            && a == b
+        {
+            let mean = px.iter().map(|&x| x as f64).sum::<f64>() / px.len() as f64;
+            return (a, mean);
+        }
+        h.step();
+    }
+}
+
+#[test]
+fn an_lfo_binding_animates_the_viewport_with_no_recompiles() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut scene = presets::load("sierpinski").unwrap();
+    let light = scene.lights[0].intensity;
+    scene.bindings.push(binding(
+        r#"Binding(param: "lights[0].intensity", source: Lfo(wave: Sine, rate: 0.5), to: (0.1, 2.5))"#,
+    ));
+    scene.validate().unwrap();
+    let mut h = harness_with(ExploreOptions::new(scene, "lfo"), egui::vec2(320.0, 240.0));
+    h.run_steps(2);
+    // The whole viewport: no side panels, overlay or live panels.
+    h.key_press(egui::Key::F2);
+    h.key_press(egui::Key::F3);
+    h.key_press(egui::Key::F4);
+    step_until(&mut h, "a first frame", |a| a.shown_values().is_some());
+    let compiles = h.state().compiles;
+    let (v0, m0) = shown_value_and_mean(&mut h);
+    // Frames keep coming with new values and no input at all.
+    step_until(&mut h, "a frame with a different light", |a| {
+        a.shown_values()
+            .and_then(|v| v[0])
+            .is_some_and(|v| (v - v0).abs() > 0.6)
+    });
+    let (v1, m1) = shown_value_and_mean(&mut h);
+    eprintln!("light {v0:.3} -> mean level {m0:.2}; light {v1:.3} -> mean level {m1:.2}");
+    assert!((v1 - v0).abs() > 0.6);
+    assert!(
+        (m1 - m0) * (v1 - v0) > 0.0 && (m1 - m0).abs() > 1.0,
+        "the viewport did not follow the light: {m0:.2} -> {m1:.2}"
+    );
+    assert_eq!(h.state().compiles, compiles, "modulation recompiled");
+    assert_eq!(compiles, 1, "only the first compile");
+    let app = h.state();
+    assert_eq!(
+        app.scene.lights[0].intensity, light,
+        "the document is not modulated"
+    );
+    assert!(app.notes().iter().all(|n| !n.1), "{:?}", app.notes());
+}
+
+#[test]
+fn an_osc_packet_reaches_the_bound_parameter_in_the_next_frames_and_the_log() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut scene = presets::load("sierpinski").unwrap();
+    scene.bindings.push(binding(
+        r#"Binding(param: "lights[0].intensity", source: Osc(address: "/test/light"), to: (0.2, 1.6))"#,
+    ));
+    let dir = std::env::temp_dir().join(format!("fathom-live-window-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = dir.join("frames.jsonl");
+    let mut opts = ExploreOptions::new(scene, "osc");
+    opts.osc_bind = Some("127.0.0.1:0".parse().unwrap());
+    opts.log = Some(log.clone());
+    let mut h = harness_with(opts, egui::vec2(480.0, 320.0));
+    h.run_steps(3);
+    let addr = h.state().live.modulator.osc_addr().expect("listening");
+    assert_eq!(h.state().live.modulator.live()[0].value, None, "nothing yet");
+    // The panel shows the listener.
+    h.get_by_label_contains(&format!("OSC on {addr}"));
+    let compiles = h.state().compiles;
+
+    let tx = fathom_live::Sender::new(addr).unwrap();
+    tx.send("/test/light", &[1.0]).unwrap();
+    let frames = step_until(&mut h, "the packet in the live scene", |a| {
+        a.live_scene().lights[0].intensity == 1.6
+    });
+    eprintln!("the packet reached the live scene after {frames} frame(s)");
+    assert!(frames <= 20, "{frames} frames");
+    let frames = step_until(&mut h, "a frame showing it", |a| {
+        a.shown_values() == Some(&[Some(1.6)][..])
+    });
+    eprintln!("... and the screen {frames} frame(s) later");
+
+    // Garbage and a NaN are counted and change nothing.
+    tx.send_raw(b"not osc at all").unwrap();
+    tx.send("/test/light", &[f64::NAN]).unwrap();
+    step_until(&mut h, "two rejections", |a| a.live.counters().rejected >= 2);
+    h.run_steps(2);
+    assert_eq!(h.state().live_scene().lights[0].intensity, 1.6);
+    // A second value goes through too.
+    tx.send("/test/light", &[0.0]).unwrap();
+    step_until(&mut h, "the second packet", |a| {
+        a.live_scene().lights[0].intensity == 0.2
+    });
+    h.get_by_label_contains("3 received");
+    assert_eq!(h.state().compiles, compiles, "OSC recompiled");
+
+    // The log's last line has the counters and the value.
+    let text = std::fs::read_to_string(&log).unwrap();
+    let last: serde_json::Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
+    assert!(last["osc"]["packets"].as_u64().unwrap() >= 4, "{last}");
+    assert!(last["osc"]["rejected"].as_u64().unwrap() >= 2, "{last}");
+    assert_eq!(last["bound"][0]["param"], "lights[0].intensity");
+    assert_eq!(last["bound"][0]["value"].as_f64(), Some(0.2), "{last}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_timeline_scrubs_plays_and_records_a_key_at_the_view() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    use fathom_core::flight::{FlightPath, Keyframe};
+    let mut scene = presets::load("sierpinski").unwrap();
+    let c = scene.camera.clone();
+    let doc_light = scene.lights[0].intensity;
+    let key = |scale: f64, swing: f64, light: Option<f64>| {
+        let mut k = Keyframe::from_camera(&c);
+        k.eye = c.target + (c.eye - c.target) * scale + glam::DVec3::new(swing, 0.0, 0.0);
+        if let Some(l) = light {
+            k.params.insert("lights[0].intensity".into(), l);
+        }
+        k
+    };
+    scene.paths.push(FlightPath::new(
+        "orbit",
+        8.0,
+        vec![
+            key(1.0, 0.0, Some(0.5)),
+            key(0.8, 0.6, None),
+            key(0.6, -0.4, Some(1.5)),
+        ],
+    ));
+    scene.validate().unwrap();
+    let mut h = harness_with(ExploreOptions::new(scene, "timeline"), egui::vec2(640.0, 480.0));
+    h.run_steps(3);
+    let flight = |app: &ExplorerApp| {
+        let tape = fathom_core::Tape::compile(&app.scene).unwrap();
+        app.scene.paths[0].prepare(&app.scene, Some(&tape)).unwrap()
+    };
+    let check_at = |app: &ExplorerApp, t: f64| {
+        let pose = flight(app).sample(t);
+        let view = app.view_camera();
+        let d = (view.eye - pose.camera.eye).length();
+        assert!(d < 1e-9, "the view is {d} from the path's eye at {t} s");
+        let fwd = (view.target - view.eye).normalize();
+        assert!(fwd.dot(pose.forward) > 1.0 - 1e-9, "{fwd} vs {}", pose.forward);
+        assert!((view.fov - pose.camera.fov).abs() < 1e-9);
+        let light = app.live_scene().lights[0].intensity;
+        assert!((light - pose.params[0]).abs() < 1e-12, "{light} vs {:?}", pose.params);
+    };
+
+    // Scrub to 5 s through the slider.
+    h.get_by_role_and_label(Role::Slider, "path time")
+        .set_value_accesskit(5.0);
+    h.run_steps(2);
+    assert_eq!(h.state().live.timeline.t, 5.0);
+    check_at(h.state(), 5.0);
+    let far = (h.state().view_camera().eye - c.eye).length();
+    assert!(far > 0.1, "the scrub moved the camera {far}");
+    // The parameter key is written into the live scene only.
+    assert_eq!(h.state().scene.lights[0].intensity, doc_light);
+
+    // Add a key at this view: it lands at 5 s.
+    h.get_by_label("Add key at view").click();
+    h.run_steps(2);
+    let app = h.state();
+    assert_eq!(app.scene.paths[0].keys.len(), 4);
+    let f = flight(app);
+    let i = f
+        .key_times()
+        .iter()
+        .position(|&k| (k - 5.0).abs() < 1e-6)
+        .expect("a key at 5 s");
+    assert!((app.scene.paths[0].keys[i].eye - app.view_camera().eye).length() < 1e-12);
+
+    // Play from 0 for a few frames, then pause: time moved, the view is the path's pose.
+    h.get_by_role_and_label(Role::Slider, "path time")
+        .set_value_accesskit(0.0);
+    h.run_steps(2);
+    h.get_by_label("Play").click();
+    for _ in 0..8 {
+        h.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    h.get_by_label("Pause").click();
+    h.run_steps(2);
+    let t = h.state().live.timeline.t;
+    assert!(t > 0.05 && t < 8.0, "played to {t} s");
+    assert!(!h.state().live.timeline.playing);
+    check_at(h.state(), t);
+    h.run_steps(3);
+    assert_eq!(h.state().live.timeline.t, t, "paused");
+
+    // Undo removes the key.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().scene.paths[0].keys.len(), 3);
+}
+
+#[test]
+fn an_osc_port_in_use_is_refused_before_any_window_naming_the_port() {
+    let taken = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap();
+    let mut opts = ExploreOptions::new(presets::load("sierpinski").unwrap(), "busy");
+    opts.osc_bind = Some(addr);
+    match fathom_app::run(opts) {
+        Err(e @ fathom_app::WindowError::Osc(_)) => {
+            let msg = e.to_string();
+            assert!(msg.contains(&addr.to_string()), "{msg}");
+            assert!(msg.contains("--osc-port"), "{msg}");
+        }
+        other => panic!("expected the OSC error, got {other:?}"),
+    }
 }
