@@ -137,8 +137,11 @@ struct ShotDialog {
 /// The explorer window's state.
 pub struct ExplorerApp {
     pub scene: Scene,
-    /// Bumps with every edit of the scene.
+    /// Bumps with every change of the scene the worker renders (document edits and live
+    /// changes alike).
     pub generation: u64,
+    /// Bumps with every edit of the document only (the timeline's prepared path follows it).
+    doc_generation: u64,
     name: String,
     path: Option<PathBuf>,
     watch: Option<Watch>,
@@ -253,6 +256,7 @@ impl ExplorerApp {
             file_camera: opts.path.as_ref().map(|_| opts.scene.camera.clone()),
             scene: opts.scene.clone(),
             generation: 0,
+            doc_generation: 0,
             name: opts.name,
             path: opts.path,
             watch,
@@ -356,7 +360,7 @@ impl ExplorerApp {
         let view = self.camera.camera();
         let (scene, path_camera, bound_camera) = self.live.derive(
             &self.scene,
-            self.generation,
+            self.doc_generation,
             &self.tape,
             &view,
             self.frame_dt,
@@ -410,6 +414,7 @@ impl ExplorerApp {
     /// After any change of `self.scene`: new generation, the window's tape, the worker.
     fn scene_changed(&mut self) {
         self.generation += 1;
+        self.doc_generation += 1;
         if self.tape.update_params(&self.scene).is_err() {
             match Tape::compile(&self.scene) {
                 Ok(t) => self.tape = t,
@@ -877,7 +882,7 @@ impl ExplorerApp {
                             ui,
                             &mut self.live,
                             &self.scene,
-                            self.generation,
+                            self.doc_generation,
                             &self.tape,
                         );
                     });
@@ -904,7 +909,7 @@ impl ExplorerApp {
     pub fn add_key(&mut self) {
         let t = self.live.timeline.t;
         let i = self.live.timeline.path;
-        let flight = match self.live.flight(&self.scene, self.generation, &self.tape) {
+        let flight = match self.live.flight(&self.scene, self.doc_generation, &self.tape) {
             Some(Ok(f)) => f.clone(),
             Some(Err(e)) => {
                 let e = e.clone();

@@ -107,7 +107,8 @@ impl Live {
         self.clock.elapsed().as_secs_f64()
     }
 
-    /// The prepared flight of the selected path (prepared again after a document edit).
+    /// The prepared flight of the selected path (prepared again after a document edit:
+    /// `generation` counts document edits, not live changes).
     pub fn flight(
         &mut self,
         doc: &Scene,

@@ -402,6 +402,9 @@ fn an_osc_packet_reaches_the_bound_parameter_in_the_next_frames_and_the_log() {
     scene.bindings.push(binding(
         r#"Binding(param: "lights[0].intensity", source: Osc(address: "/test/light"), to: (0.2, 1.6))"#,
     ));
+    scene.bindings.push(binding(
+        r#"Binding(param: "camera.fov", source: Osc(address: "/test/fov"), to: (30.0, 60.0))"#,
+    ));
     let dir = std::env::temp_dir().join(format!("fathom-live-window-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let log = dir.join("frames.jsonl");
@@ -424,7 +427,7 @@ fn an_osc_packet_reaches_the_bound_parameter_in_the_next_frames_and_the_log() {
     eprintln!("the packet reached the live scene after {frames} frame(s)");
     assert!(frames <= 20, "{frames} frames");
     let frames = step_until(&mut h, "a frame showing it", |a| {
-        a.shown_values() == Some(&[Some(1.6)][..])
+        a.shown_values().is_some_and(|v| v[0] == Some(1.6))
     });
     eprintln!("... and the screen {frames} frame(s) later");
 
@@ -445,6 +448,12 @@ fn an_osc_packet_reaches_the_bound_parameter_in_the_next_frames_and_the_log() {
     h.get_by_label("0.2 (2 received)");
     assert_eq!(h.state().compiles, compiles, "OSC recompiled");
 
+    // A camera binding drives the view's camera; the flown camera keeps its own.
+    let flown = h.state().camera.camera().fov;
+    tx.send("/test/fov", &[1.0]).unwrap();
+    step_until(&mut h, "the fov packet", |a| a.view_camera().fov == 60.0);
+    assert_eq!(h.state().camera.camera().fov, flown);
+
     // The log's last line has the counters and the value.
     let text = std::fs::read_to_string(&log).unwrap();
     let last: serde_json::Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
@@ -452,6 +461,8 @@ fn an_osc_packet_reaches_the_bound_parameter_in_the_next_frames_and_the_log() {
     assert!(last["osc"]["rejected"].as_u64().unwrap() >= 2, "{last}");
     assert_eq!(last["bound"][0]["param"], "lights[0].intensity");
     assert_eq!(last["bound"][0]["value"].as_f64(), Some(0.2), "{last}");
+    assert_eq!(last["bound"][1]["value"].as_f64(), Some(60.0), "{last}");
+    assert_eq!(last["camera"]["fov"].as_f64(), Some(60.0), "{last}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
