@@ -877,18 +877,22 @@ impl ExplorerApp {
             .default_size(160.0)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    egui::CollapsingHeader::new("Timeline").default_open(true).show(ui, |ui| {
-                        action = live::timeline_ui(
-                            ui,
-                            &mut self.live,
-                            &self.scene,
-                            self.doc_generation,
-                            &self.tape,
-                        );
-                    });
-                    egui::CollapsingHeader::new("Bindings").default_open(true).show(ui, |ui| {
-                        live::bindings_ui(ui, &self.live, &self.scene);
-                    });
+                    egui::CollapsingHeader::new("Timeline")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            action = live::timeline_ui(
+                                ui,
+                                &mut self.live,
+                                &self.scene,
+                                self.doc_generation,
+                                &self.tape,
+                            );
+                        });
+                    egui::CollapsingHeader::new("Bindings")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            live::bindings_ui(ui, &self.live, &self.scene);
+                        });
                 });
             });
         match action {
@@ -909,7 +913,10 @@ impl ExplorerApp {
     pub fn add_key(&mut self) {
         let t = self.live.timeline.t;
         let i = self.live.timeline.path;
-        let flight = match self.live.flight(&self.scene, self.doc_generation, &self.tape) {
+        let flight = match self
+            .live
+            .flight(&self.scene, self.doc_generation, &self.tape)
+        {
             Some(Ok(f)) => f.clone(),
             Some(Err(e)) => {
                 let e = e.clone();
@@ -1193,7 +1200,10 @@ impl ExplorerApp {
             let c = self.live.counters();
             lines.push(match self.live.modulator.osc_addr() {
                 Some(a) => format!("OSC {a}: {} packets, {} rejected", c.packets, c.rejected),
-                None => format!("{} binding(s); OSC not listening", self.scene.bindings.len()),
+                None => format!(
+                    "{} binding(s); OSC not listening",
+                    self.scene.bindings.len()
+                ),
             });
         }
         let text = lines.join("\n");
@@ -1328,11 +1338,7 @@ impl ExplorerApp {
             camera: cam.clone(),
             osc: self.live.counters(),
             bound: self.live.bound_values(&self.scene),
-            path_time: self
-                .live
-                .timeline
-                .engaged
-                .then_some(self.live.timeline.t),
+            path_time: self.live.timeline.engaged.then_some(self.live.timeline.t),
         };
         // Frames eframe still runs after the scripted run asked to close are not logged.
         if !self.script.closing

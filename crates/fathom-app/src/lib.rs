@@ -51,7 +51,9 @@ pub enum WindowError {
     #[error("{0}")]
     Failed(String),
     /// The OSC listener could not start (a port in use); nothing was opened.
-    #[error("{0} (is another program, or another fathom, using it? choose another with --osc-port)")]
+    #[error(
+        "{0} (is another program, or another fathom, using it? choose another with --osc-port)"
+    )]
     Osc(#[source] fathom_live::LiveError),
 }
 

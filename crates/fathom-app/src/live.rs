@@ -364,7 +364,7 @@ pub fn bindings_ui(ui: &mut egui::Ui, live: &Live, doc: &Scene) {
                 let stale = live.applied.stale.contains(&i);
                 let text = match (stale, v.value) {
                     (true, _) => "parameter gone".to_string(),
-                    (false, Some(x)) => format!("{}", fmt(x)),
+                    (false, Some(x)) => fmt(x),
                     (false, None) => "waiting for OSC".to_string(),
                 };
                 let text = if matches!(b.source, Source::Osc(_)) {
@@ -516,12 +516,20 @@ mod tests {
         // Pinning the middle key to the path clock at its own wall time keeps it there.
         scene.paths[0].keys[1].time = Some(path_clock(&p, mid));
         let f2 = scene.paths[0].prepare(&scene, None).unwrap();
-        assert!((f2.key_times()[1] - mid).abs() < 1e-9, "{:?}", f2.key_times());
+        assert!(
+            (f2.key_times()[1] - mid).abs() < 1e-9,
+            "{:?}",
+            f2.key_times()
+        );
         // And a key added at a wall time lands at that time.
         let (at, note) = add_key(&mut scene, 0, &f2, 7.5, &c3);
         assert_eq!(note, None);
         let f3 = scene.paths[0].prepare(&scene, None).unwrap();
-        assert!((f3.key_times()[at] - 7.5).abs() < 1e-9, "{:?}", f3.key_times());
+        assert!(
+            (f3.key_times()[at] - 7.5).abs() < 1e-9,
+            "{:?}",
+            f3.key_times()
+        );
     }
 
     #[test]
