@@ -876,10 +876,12 @@ impl ExplorerApp {
             .resizable(true)
             .default_size(160.0)
             .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| {
-                    egui::CollapsingHeader::new("Timeline")
-                        .default_open(true)
-                        .show(ui, |ui| {
+                // Side by side: the timeline on the left, the bindings on the right.
+                ui.columns(2, |cols| {
+                    egui::ScrollArea::both()
+                        .id_salt("timeline scroll")
+                        .show(&mut cols[0], |ui| {
+                            ui.strong("Timeline");
                             action = live::timeline_ui(
                                 ui,
                                 &mut self.live,
@@ -888,9 +890,10 @@ impl ExplorerApp {
                                 &self.tape,
                             );
                         });
-                    egui::CollapsingHeader::new("Bindings")
-                        .default_open(true)
-                        .show(ui, |ui| {
+                    egui::ScrollArea::both()
+                        .id_salt("bindings scroll")
+                        .show(&mut cols[1], |ui| {
+                            ui.strong("Bindings");
                             live::bindings_ui(ui, &self.live, &self.scene);
                         });
                 });

@@ -339,8 +339,8 @@ pub fn osc_text(addr: Option<SocketAddr>, c: &OscCounters) -> String {
     }
 }
 
-/// The bindings panel: each binding's parameter, source, mapping and live value; the OSC
-/// counters.
+/// The bindings panel: the OSC counters, then each binding's parameter, live level and value,
+/// source and mapping.
 pub fn bindings_ui(ui: &mut egui::Ui, live: &Live, doc: &Scene) {
     ui.label(osc_text(live.modulator.osc_addr(), &live.counters()));
     if doc.bindings.is_empty() {
@@ -353,14 +353,12 @@ pub fn bindings_ui(ui: &mut egui::Ui, live: &Live, doc: &Scene) {
         .num_columns(4)
         .show(ui, |ui| {
             ui.strong("parameter");
+            ui.strong("live");
             ui.strong("source");
             ui.strong("mapping");
-            ui.strong("live");
             ui.end_row();
             for (i, (b, v)) in doc.bindings.iter().zip(values).enumerate() {
                 ui.label(&b.param);
-                ui.label(source_text(b));
-                ui.label(mapping_text(b));
                 let stale = live.applied.stale.contains(&i);
                 let text = match (stale, v.value) {
                     (true, _) => "parameter gone".to_string(),
@@ -378,6 +376,8 @@ pub fn bindings_ui(ui: &mut egui::Ui, live: &Live, doc: &Scene) {
                         .text(text),
                 )
                 .on_hover_text("the source's level in [0, 1], and the value written");
+                ui.label(source_text(b));
+                ui.label(mapping_text(b));
                 ui.end_row();
             }
         });
