@@ -338,9 +338,20 @@ fn step_until(
 }
 
 /// The first bound value of the frame on screen, and the viewport's mean level (of 255),
-/// read so that both belong to the same frame.
-fn shown_value_and_mean(h: &mut Harness<'static, ExplorerApp>) -> (f64, f64) {
+/// read so that both belong to the same frame, rendered at the viewport's full size (so two
+/// such frames of the same view differ only by what the scene's numbers change; a coarse
+/// interactive frame loses much of a fractal's fine detail, and so its mean level).
+fn shown_value_and_mean(h: &mut Harness<'static, ExplorerApp>) -> (f64, f64, Vec<u8>) {
     loop {
+        let r = h.state().viewport_rect;
+        let coarse = h.state().viewport.shown.as_ref().is_none_or(|s| {
+            s.request.width as f32 != r.width() || s.request.height as f32 != r.height()
+        });
+        if coarse {
+            h.step();
+            std::thread::sleep(Duration::from_millis(5));
+            continue;
+        }
         let before = h.state().shown_values().and_then(|v| v[0]);
         let (_, _, px) = viewport_pixels(h);
         let after = h.state().shown_values().and_then(|v| v[0]);
@@ -348,7 +359,7 @@ fn shown_value_and_mean(h: &mut Harness<'static, ExplorerApp>) -> (f64, f64) {
             && a == b
         {
             let mean = px.iter().map(|&x| x as f64).sum::<f64>() / px.len() as f64;
-            return (a, mean);
+            return (a, mean, px);
         }
         h.step();
     }
@@ -357,7 +368,7 @@ fn shown_value_and_mean(h: &mut Harness<'static, ExplorerApp>) -> (f64, f64) {
 #[test]
 fn an_lfo_binding_animates_the_viewport_with_no_recompiles() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let mut scene = presets::load("sierpinski").unwrap();
+    let mut scene = presets::load("menger").unwrap();
     let light = scene.lights[0].intensity;
     scene.bindings.push(binding(
         r#"Binding(param: "lights[0].intensity", source: Lfo(wave: Sine, rate: 0.5), to: (0.1, 2.5))"#,
@@ -371,16 +382,31 @@ fn an_lfo_binding_animates_the_viewport_with_no_recompiles() {
     h.key_press(egui::Key::F4);
     step_until(&mut h, "a first frame", |a| a.shown_values().is_some());
     let compiles = h.state().compiles;
-    let (v0, m0) = shown_value_and_mean(&mut h);
+    let (v0, m0, px0) = shown_value_and_mean(&mut h);
     // Frames keep coming with new values and no input at all.
     step_until(&mut h, "a frame with a different light", |a| {
         a.shown_values()
             .and_then(|v| v[0])
             .is_some_and(|v| (v - v0).abs() > 0.6)
     });
-    let (v1, m1) = shown_value_and_mean(&mut h);
-    eprintln!("light {v0:.3} -> mean level {m0:.2}; light {v1:.3} -> mean level {m1:.2}");
+    let (v1, m1, px1) = shown_value_and_mean(&mut h);
+    let changed = px0
+        .iter()
+        .zip(&px1)
+        .filter(|(a, b)| a.abs_diff(**b) > MAX_LEVEL_DIFF)
+        .count() as f64
+        / px0.len() as f64;
+    eprintln!(
+        "light {v0:.3} -> mean level {m0:.2}; light {v1:.3} -> mean level {m1:.2}; {:.1} % of \
+         channels changed",
+        changed * 100.0
+    );
     assert!((v1 - v0).abs() > 0.6);
+    assert!(
+        changed > 0.2,
+        "only {:.1} % of channels changed",
+        changed * 100.0
+    );
     assert!(
         (m1 - m0) * (v1 - v0) > 0.0 && (m1 - m0).abs() > 1.0,
         "the viewport did not follow the light: {m0:.2} -> {m1:.2}"
@@ -608,7 +634,7 @@ fn a_flood_of_osc_packets_and_garbage_neither_stops_nor_breaks_the_window() {
     let mut h = harness_with(opts, egui::vec2(320.0, 240.0));
     h.run_steps(3);
     let addr = h.state().live.modulator.osc_addr().expect("listening");
-    let mut step_ms = |h: &mut Harness<'static, ExplorerApp>| {
+    let step_ms = |h: &mut Harness<'static, ExplorerApp>| {
         let t = Instant::now();
         h.step();
         t.elapsed().as_secs_f64() * 1e3
