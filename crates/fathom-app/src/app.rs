@@ -5,12 +5,18 @@
 //!
 //! Layout: a menu bar; on the left the scene (preset picker, the tree, the root's IFS loop,
 //! lights and render settings); on the right the selected node's inspector and the renderer's
-//! settings; at the bottom a status bar (left free above it for a timeline and a bindings panel);
-//! in the middle the viewport with its stats overlay.
+//! settings; at the bottom a status bar, and above it (when the scene has flight paths or
+//! bindings, or OSC is listened for) the timeline and bindings panels ([`crate::live`]); in the
+//! middle the viewport with its stats overlay.
+//!
+//! The document (`scene`) is what undo and save see; the render worker gets the *live scene*
+//! derived from it every frame (a flight path's parameter keys, the bindings' values), sent only
+//! when its numbers change.
 
 use crate::camera::{self, CameraController, Mode};
 use crate::files::{BrowseFor, FileBrowser, Watch};
 use crate::history::History;
+use crate::live::{self, Live, TimelineAction};
 use crate::script::{FrameLog, Script};
 use crate::shot::Shot;
 use crate::tree::{self, NodePath, TreeAction};
@@ -21,6 +27,7 @@ use egui::emath::GuiRounding;
 use fathom_core::presets::{self, PRESETS};
 use fathom_core::{Projection, Scene, Tape, scene_file};
 use fathom_render::{Backend, RenderRequest, TracerRule};
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -42,6 +49,8 @@ pub struct ExploreOptions {
     pub screenshot: Option<PathBuf>,
     /// Write one JSON line per frame here.
     pub log: Option<PathBuf>,
+    /// Listen for OSC here (`--osc-port`, `--osc-bind`); `None`: no listener.
+    pub osc_bind: Option<SocketAddr>,
     /// Where the window leaves why a scripted run failed, for the exit code.
     pub exit_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
@@ -58,6 +67,7 @@ impl ExploreOptions {
             frames: None,
             screenshot: None,
             log: None,
+            osc_bind: None,
             exit_error: Default::default(),
         }
     }
@@ -131,8 +141,11 @@ struct ShotDialog {
 /// The explorer window's state.
 pub struct ExplorerApp {
     pub scene: Scene,
-    /// Bumps with every edit of the scene.
+    /// Bumps with every change of the scene the worker renders (document edits and live
+    /// changes alike).
     pub generation: u64,
+    /// Bumps with every edit of the document only (the timeline's prepared path follows it).
+    doc_generation: u64,
     name: String,
     path: Option<PathBuf>,
     watch: Option<Watch>,
@@ -178,13 +191,39 @@ pub struct ExplorerApp {
     show_help: bool,
     tree_actions: Vec<TreeAction>,
     exit_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+    /// Modulation and the timeline.
+    pub live: Live,
+    /// The live scene last sent to the worker, and its generation.
+    live_scene: Scene,
+    sent_generation: u64,
+    /// The camera the bindings drive this frame (when a binding drives a camera number).
+    live_camera: Option<fathom_core::Camera>,
+    /// The bound values sent with each recent generation, to tell what the frame on screen
+    /// shows.
+    sent_values: std::collections::VecDeque<(u64, Vec<Option<f64>>)>,
+    /// Whether the timeline and bindings panels are shown (F4).
+    pub show_live: bool,
+    /// Seconds since the previous frame.
+    frame_dt: f64,
 }
 
 impl ExplorerApp {
-    /// A window for `opts` (the GPU of `cc`, when it has one, renders when it is a real GPU).
+    /// A window for `opts` (the GPU of `cc`, when it has one, renders when it is a real GPU),
+    /// starting its OSC listener when `opts.osc_bind` asks for one.
     pub fn new(
         cc: &eframe::CreationContext<'_>,
         opts: ExploreOptions,
+    ) -> Result<ExplorerApp, String> {
+        let m = live::start_modulator(&opts.scene, opts.osc_bind).map_err(|e| e.to_string())?;
+        ExplorerApp::with_modulator(cc, opts, m)
+    }
+
+    /// A window for `opts` with a modulator already started (`fathom_app::run` starts it, and
+    /// its listener, before any window opens, so a port in use fails first).
+    pub fn with_modulator(
+        cc: &eframe::CreationContext<'_>,
+        opts: ExploreOptions,
+        modulator: fathom_live::Modulator,
     ) -> Result<ExplorerApp, String> {
         let ctx = cc.egui_ctx.clone();
         let tape = Tape::compile(&opts.scene).map_err(|e| e.to_string())?;
@@ -219,8 +258,9 @@ impl ExplorerApp {
         let watch = opts.path.clone().map(Watch::new);
         Ok(ExplorerApp {
             file_camera: opts.path.as_ref().map(|_| opts.scene.camera.clone()),
-            scene: opts.scene,
+            scene: opts.scene.clone(),
             generation: 0,
+            doc_generation: 0,
             name: opts.name,
             path: opts.path,
             watch,
@@ -270,6 +310,13 @@ impl ExplorerApp {
             show_help: false,
             tree_actions: Vec::new(),
             exit_error: opts.exit_error,
+            live: Live::new(modulator),
+            live_scene: opts.scene,
+            sent_generation: 0,
+            live_camera: None,
+            sent_values: Default::default(),
+            show_live: true,
+            frame_dt: 0.0,
         })
     }
 
@@ -288,9 +335,62 @@ impl ExplorerApp {
         }
     }
 
-    /// The camera frames are rendered from.
+    /// The camera frames are rendered from: the flown camera, or the camera the bindings
+    /// drive when a binding drives a camera number.
     pub fn view_camera(&self) -> fathom_core::Camera {
-        self.camera.camera()
+        self.live_camera
+            .clone()
+            .unwrap_or_else(|| self.camera.camera())
+    }
+
+    /// The scene the render worker was last sent: the document with the timeline's parameter
+    /// keys and the bindings' values written in.
+    pub fn live_scene(&self) -> &Scene {
+        &self.live_scene
+    }
+
+    /// The bound values (in the order of `scene.bindings`) of the scene generation on screen.
+    pub fn shown_values(&self) -> Option<&[Option<f64>]> {
+        let g = self.viewport.shown.as_ref()?.generation;
+        self.sent_values
+            .iter()
+            .find(|(s, _)| *s == g)
+            .map(|(_, v)| v.as_slice())
+    }
+
+    /// One frame of the live layer: derives the live scene (timeline, bindings) from the
+    /// document and sends it to the worker when its numbers changed (a new generation when
+    /// the document did not change: the view is new, the tape is the same).
+    fn sync_live(&mut self) {
+        let view = self.camera.camera();
+        let (scene, path_camera, bound_camera) = self.live.derive(
+            &self.scene,
+            self.doc_generation,
+            &self.tape,
+            &view,
+            self.frame_dt,
+        );
+        if let Some(c) = path_camera {
+            self.camera = CameraController::new(&c);
+        }
+        self.live_camera = bound_camera;
+        if scene == self.live_scene && self.sent_generation == self.generation {
+            return;
+        }
+        if self.sent_generation == self.generation {
+            self.generation += 1;
+        }
+        if scene != self.live_scene {
+            let _ = self.tape.update_params(&scene);
+        }
+        self.worker.set_scene(self.generation, scene.clone());
+        self.live_scene = scene;
+        self.sent_generation = self.generation;
+        let values = self.live.modulator.live().iter().map(|v| v.value).collect();
+        self.sent_values.push_back((self.generation, values));
+        while self.sent_values.len() > 32 {
+            self.sent_values.pop_front();
+        }
     }
 
     /// The key of the view on screen now.
@@ -319,6 +419,7 @@ impl ExplorerApp {
     /// After any change of `self.scene`: new generation, the window's tape, the worker.
     fn scene_changed(&mut self) {
         self.generation += 1;
+        self.doc_generation += 1;
         if self.tape.update_params(&self.scene).is_err() {
             match Tape::compile(&self.scene) {
                 Ok(t) => self.tape = t,
@@ -328,7 +429,10 @@ impl ExplorerApp {
         if tree::node_at(&self.scene.root, &self.selected).is_none() {
             self.selected.clear();
         }
-        self.worker.set_scene(self.generation, self.scene.clone());
+        if let Some(e) = self.live.rebind(&self.scene) {
+            self.note(e, true);
+        }
+        // The live scene (with the bindings' values) goes to the worker after the panels.
         self.pending_edit = Some((self.generation, Instant::now()));
     }
 
@@ -476,7 +580,7 @@ impl ExplorerApp {
     fn replace_worker(&mut self, ctx: &egui::Context, why: &str) {
         self.viewport.worker_lost();
         let wake = ctx.clone();
-        match Worker::start(self.scene.clone(), self.generation, move || {
+        match Worker::start(self.live_scene.clone(), self.sent_generation, move || {
             wake.request_repaint()
         }) {
             Ok(w) => {
@@ -597,9 +701,18 @@ impl ExplorerApp {
         if ctx.egui_wants_keyboard_input() {
             return;
         }
-        let (f2, f3) = ctx.input(|i| (i.key_pressed(Key::F2), i.key_pressed(Key::F3)));
+        let (f2, f3, f4) = ctx.input(|i| {
+            (
+                i.key_pressed(Key::F2),
+                i.key_pressed(Key::F3),
+                i.key_pressed(Key::F4),
+            )
+        });
         if f2 {
             self.show_panels = !self.show_panels;
+        }
+        if f4 {
+            self.show_live = !self.show_live;
         }
         if f3 {
             self.show_overlay = !self.show_overlay;
@@ -702,6 +815,7 @@ impl ExplorerApp {
                     }
                     ui.checkbox(&mut self.show_panels, "Side panels (F2)");
                     ui.checkbox(&mut self.show_overlay, "Stats overlay (F3)");
+                    ui.checkbox(&mut self.show_live, "Timeline and bindings (F4)");
                     if ui.button("Fly (leave orbit)").clicked() {
                         self.camera.mode = Mode::Fly;
                         ui.close();
@@ -751,6 +865,81 @@ impl ExplorerApp {
                 }
             });
         });
+    }
+
+    /// Whether the live panels have anything to show.
+    fn has_live(&self) -> bool {
+        !self.scene.paths.is_empty()
+            || !self.scene.bindings.is_empty()
+            || self.live.modulator.osc_addr().is_some()
+    }
+
+    /// The timeline and the bindings, above the status bar.
+    fn live_panel(&mut self, ui: &mut egui::Ui) {
+        let mut action = None;
+        egui::Panel::bottom("live")
+            .resizable(true)
+            .default_size(160.0)
+            .show(ui, |ui| {
+                // Side by side: the timeline on the left, the bindings on the right.
+                ui.columns(2, |cols| {
+                    egui::ScrollArea::both()
+                        .id_salt("timeline scroll")
+                        .show(&mut cols[0], |ui| {
+                            ui.strong("Timeline");
+                            action = live::timeline_ui(
+                                ui,
+                                &mut self.live,
+                                &self.scene,
+                                self.doc_generation,
+                                &self.tape,
+                            );
+                        });
+                    egui::ScrollArea::both()
+                        .id_salt("bindings scroll")
+                        .show(&mut cols[1], |ui| {
+                            ui.strong("Bindings");
+                            live::bindings_ui(ui, &self.live, &self.scene);
+                        });
+                });
+            });
+        match action {
+            Some(TimelineAction::AddKey) => self.add_key(),
+            Some(TimelineAction::Retime(d)) => {
+                let i = self.live.timeline.path;
+                if let Some(p) = self.scene.paths.get_mut(i) {
+                    p.retime(d);
+                    self.edit_label = format!("retime path {}", p.name);
+                }
+            }
+            None => {}
+        }
+    }
+
+    /// Adds a keyframe at the current view to the timeline's path at its time (a document
+    /// edit, undoable).
+    pub fn add_key(&mut self) {
+        let t = self.live.timeline.t;
+        let i = self.live.timeline.path;
+        let flight = match self
+            .live
+            .flight(&self.scene, self.doc_generation, &self.tape)
+        {
+            Some(Ok(f)) => f.clone(),
+            Some(Err(e)) => {
+                let e = e.clone();
+                self.note(format!("add key: {e}"), true);
+                return;
+            }
+            None => return,
+        };
+        let cam = self.view_camera();
+        let (at, note) = live::add_key(&mut self.scene, i, &flight, t, &cam);
+        self.edit_label = format!("add key {at} to path {}", self.scene.paths[i].name);
+        self.note(
+            note.unwrap_or_else(|| format!("added key {at} at {t:.2} s")),
+            false,
+        );
     }
 
     fn left_panel(&mut self, ui: &mut egui::Ui) {
@@ -1033,6 +1222,16 @@ impl ExplorerApp {
                 self.compiles
             ));
         }
+        if !self.scene.bindings.is_empty() || self.live.modulator.osc_addr().is_some() {
+            let c = self.live.counters();
+            lines.push(match self.live.modulator.osc_addr() {
+                Some(a) => format!("OSC {a}: {} packets, {} rejected", c.packets, c.rejected),
+                None => format!(
+                    "{} binding(s); OSC not listening",
+                    self.scene.bindings.len()
+                ),
+            });
+        }
         let text = lines.join("\n");
         let pos = rect.left_top() + egui::vec2(8.0, 8.0);
         let galley = painter.layout_no_wrap(
@@ -1135,6 +1334,7 @@ impl ExplorerApp {
 
     /// One window frame of logic after the panels: scheduling, the scripted run, the log.
     fn after_panels(&mut self, ctx: &egui::Context) {
+        self.sync_live();
         let cam = self.view_camera();
         let base = self.settings.base_request();
         let key = view_key(&cam, self.generation, &base);
@@ -1163,6 +1363,9 @@ impl ExplorerApp {
             edit_latency_ms: self.edit_latency_ms,
             compiles: self.compiles,
             camera: cam.clone(),
+            osc: self.live.counters(),
+            bound: self.live.bound_values(&self.scene),
+            path_time: self.live.timeline.engaged.then_some(self.live.timeline.t),
         };
         // Frames eframe still runs after the scripted run asked to close are not logged.
         if !self.script.closing
@@ -1191,7 +1394,9 @@ impl ExplorerApp {
             || !self.viewport.settled(key)
             || ctx.input(|i| i.pointer.is_decidedly_dragging() || !i.keys_down.is_empty())
             || self.script.frames.is_some()
-            || !self.shots.is_empty();
+            || !self.shots.is_empty()
+            || !self.scene.bindings.is_empty()
+            || self.live.timeline.playing;
         if moving {
             ctx.request_repaint();
         } else if self.watch.is_some() {
@@ -1222,6 +1427,7 @@ impl eframe::App for ExplorerApp {
         let now = Instant::now();
         let dt = now.duration_since(self.last_frame).as_secs_f64();
         self.ui_ms = dt * 1e3;
+        self.frame_dt = dt;
         self.last_frame = now;
         self.poll_worker(&ctx);
         self.poll_files(&ctx);
@@ -1229,6 +1435,9 @@ impl eframe::App for ExplorerApp {
         let before = self.scene.clone();
         self.menu_bar(ui);
         self.status_bar(ui);
+        if self.show_live && self.has_live() {
+            self.live_panel(ui);
+        }
         if self.show_panels {
             self.left_panel(ui);
             self.right_panel(ui);

@@ -10,6 +10,7 @@
 //! - [`scale`]: the dynamic render-scale controller;
 //! - [`camera`], [`input`]: the camera and the controls;
 //! - [`params`], [`tree`], [`look`]: panels generated from the registry;
+//! - [`live`]: live modulation (bindings, OSC) and the flight-path timeline;
 //! - [`history`]: undo and redo; [`files`]: open, save, watch; [`shot`]: screenshots;
 //! - [`script`]: `--frames`, `--screenshot`, `--log`;
 //! - [`bench`]: the explorer's numbers without a window (`fathom bench explore`).
@@ -20,6 +21,7 @@ pub mod camera;
 pub mod files;
 pub mod history;
 pub mod input;
+pub mod live;
 pub mod look;
 pub mod params;
 pub mod scale;
@@ -48,10 +50,24 @@ pub enum WindowError {
     /// The window opened (or was about to) and then failed, or a scripted run failed.
     #[error("{0}")]
     Failed(String),
+    /// The OSC listener could not start (a port in use); nothing was opened.
+    #[error(
+        "{0} (is another program, or another fathom, using it? choose another with --osc-port)"
+    )]
+    Osc(#[source] fathom_live::LiveError),
 }
 
 /// Opens the explorer window and runs it until it is closed.
 pub fn run(opts: ExploreOptions) -> Result<(), WindowError> {
+    // Bindings and the OSC listener first: a port in use fails before any window opens.
+    let modulator = live::start_modulator(&opts.scene, opts.osc_bind).map_err(WindowError::Osc)?;
+    if !display_available() {
+        return Err(WindowError::Unavailable(
+            "no display: set DISPLAY (X11) or WAYLAND_DISPLAY, or run under `xvfb-run`; \
+             `fathom render` draws to a file without one"
+                .into(),
+        ));
+    }
     let title = format!("fathom - {}", opts.name);
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
@@ -70,7 +86,7 @@ pub fn run(opts: ExploreOptions) -> Result<(), WindowError> {
         native,
         Box::new(move |cc| {
             opened_in.store(true, std::sync::atomic::Ordering::SeqCst);
-            Ok(Box::new(ExplorerApp::new(cc, opts)?))
+            Ok(Box::new(ExplorerApp::with_modulator(cc, opts, modulator)?))
         }),
     );
     if let Err(e) = r {

@@ -1,7 +1,7 @@
 //! Scripted runs: `--frames N` (run N window frames and exit), `--screenshot OUT.png` (then
 //! render the view offline to OUT.png) and `--log FILE.jsonl` (one JSON line per window frame:
-//! frame time, render scale, renderer, refinement stage, camera, edit latency), for tests and
-//! for measuring.
+//! frame time, render scale, renderer, refinement stage, camera, edit latency, OSC counters,
+//! the bound parameters' values, the timeline's time), for tests and for measuring.
 
 use crate::worker::Stage;
 use fathom_core::Camera;
@@ -32,6 +32,12 @@ pub struct FrameLog<'a> {
     /// Tape compilations so far (parameter edits add none).
     pub compiles: u64,
     pub camera: Camera,
+    /// The OSC listener's counters (packets received, rejected, ...; zero without one).
+    pub osc: fathom_live::OscCounters,
+    /// Every binding's parameter, source level and current value.
+    pub bound: Vec<crate::live::BoundValue>,
+    /// The timeline's time when a flight path drives the view.
+    pub path_time: Option<f64>,
 }
 
 /// The scripted run's settings and log file.

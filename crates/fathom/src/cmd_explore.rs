@@ -6,6 +6,7 @@ use clap::{Args, ValueEnum};
 use fathom_app::ExploreOptions;
 use fathom_core::{presets, scene_file};
 use fathom_render::Backend;
+use std::net::SocketAddr;
 use std::path::PathBuf;
 
 /// Renderer choice for the window.
@@ -34,6 +35,7 @@ pub enum ExploreRenderer {
 ///   fathom explore my.ron                       (edit my.ron in a text editor and watch)
 ///   fathom explore --preset menger --renderer svo
 ///   fathom explore --preset menger --frames 60 --screenshot shot.png --log frames.jsonl
+///   fathom explore docs/examples/mandelbulb-dive.ron --osc-port 9000
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct ExploreArgs {
@@ -54,9 +56,18 @@ pub struct ExploreArgs {
     /// With --frames: render the final view offline to this PNG before exiting.
     #[arg(long, requires = "frames")]
     pub screenshot: Option<PathBuf>,
-    /// Write one JSON line per frame (frame ms, render scale, renderer, camera) to this file.
+    /// Write one JSON line per frame (frame ms, render scale, renderer, camera, OSC counters,
+    /// bound values) to this file.
     #[arg(long)]
     pub log: Option<PathBuf>,
+    /// Listen for OSC on this UDP port of 127.0.0.1 (this machine only), driving the scene's
+    /// OSC bindings.
+    #[arg(long, conflicts_with = "osc_bind")]
+    pub osc_port: Option<u16>,
+    /// Listen for OSC on HOST:PORT; 0.0.0.0 accepts packets from other machines, so anyone
+    /// who can reach the port drives the bound parameters (see docs/live.md).
+    #[arg(long)]
+    pub osc_bind: Option<SocketAddr>,
 }
 
 impl ExploreArgs {
@@ -98,19 +109,18 @@ impl ExploreArgs {
         o.frames = self.frames;
         o.screenshot = self.screenshot.clone();
         o.log = self.log.clone();
+        o.osc_bind = match (self.osc_port, self.osc_bind) {
+            (Some(port), _) => Some(SocketAddr::from(([127, 0, 0, 1], port))),
+            (None, bind) => bind,
+        };
         Ok(o)
     }
 }
 
 pub fn run(a: ExploreArgs) -> Result<(), String> {
     let opts = a.options()?;
-    if !fathom_app::display_available() {
-        return Err(
-            "no display: set DISPLAY (X11) or WAYLAND_DISPLAY, or run under `xvfb-run`; \
-             `fathom render` draws to a file without one"
-                .into(),
-        );
-    }
+    // Starts the OSC listener first (a port in use is refused before any window), then
+    // checks for a display.
     fathom_app::run(opts).map_err(|e| e.to_string())
 }
 
@@ -150,5 +160,26 @@ mod tests {
         a.scene = None;
         let o = a.options().unwrap();
         assert_eq!(o.name, "preset mandelbulb");
+        assert_eq!(o.osc_bind, None);
+        a.osc_port = Some(9123);
+        assert_eq!(
+            a.options().unwrap().osc_bind,
+            Some("127.0.0.1:9123".parse().unwrap()),
+            "--osc-port listens on this machine only"
+        );
+    }
+
+    #[test]
+    fn an_osc_port_in_use_is_a_clear_error_naming_the_port() {
+        let taken = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+        let port = taken.local_addr().unwrap().port();
+        let mut a: ExploreArgs = crate::clap_defaults();
+        a.preset = Some("sierpinski".into());
+        a.osc_port = Some(port);
+        let e = run(a).unwrap_err();
+        assert!(
+            e.contains(&format!("127.0.0.1:{port}")) && e.contains("--osc-port"),
+            "{e}"
+        );
     }
 }

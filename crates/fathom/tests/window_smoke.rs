@@ -156,3 +156,101 @@ fn fathom_without_arguments_opens_the_window_when_a_display_is_present() {
     assert!(!dir.join("fathom.png").exists(), "{stdout}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_real_window_listens_on_its_osc_port_and_logs_what_arrives() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    if !have_xvfb_run() {
+        eprintln!(
+            "SKIPPED the_real_window_listens_on_its_osc_port_and_logs_what_arrives: xvfb-run is \
+             not installed (bash scripts/setup.sh installs xvfb and xauth)"
+        );
+        return;
+    }
+    let dir = scratch("window-osc");
+    let mut scene = presets::load("sierpinski").unwrap();
+    use fathom_core::binding::{Binding, OscInput, Source};
+    scene.bindings.push(Binding {
+        param: "lights[0].intensity".into(),
+        source: Source::Osc(OscInput {
+            address: "/smoke/light".into(),
+            arg: 0,
+            from: (0.0, 1.0),
+        }),
+        to: (0.2, 1.6),
+        smoothing: 0.0,
+    });
+    let file = dir.join("osc.ron");
+    fathom_core::scene_file::save(&file, &scene).unwrap();
+    let log = dir.join("frames.jsonl");
+    // A free port (released just before fathom binds it).
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let stop_in = stop.clone();
+    // Sends the value every 20 ms until the window has exited.
+    let sender = std::thread::spawn(move || {
+        let tx = fathom_live::Sender::new(([127, 0, 0, 1], port).into()).unwrap();
+        let mut sent = 0u64;
+        while !stop_in.load(std::sync::atomic::Ordering::SeqCst) {
+            tx.send("/smoke/light", &[1.0]).unwrap();
+            sent += 1;
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        sent
+    });
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(env!("CARGO_BIN_EXE_fathom"))
+        .arg("explore")
+        .arg(&file)
+        .args(["--osc-port", &port.to_string(), "--frames", "40", "--log"])
+        .arg(&log)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_RUNTIME_DIR", &dir)
+        .output()
+        .expect("xvfb-run runs");
+    stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    let sent = sender.join().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "fathom explore failed: {stderr}");
+    let lines: Vec<serde_json::Value> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 40, "one log line per frame");
+    let last = lines.last().unwrap();
+    eprintln!(
+        "sent {sent}; last log line: osc {} bound {}",
+        last["osc"], last["bound"]
+    );
+    assert!(last["osc"]["packets"].as_u64().unwrap() > 0, "{last}");
+    assert_eq!(last["osc"]["rejected"].as_u64(), Some(0), "{last}");
+    assert_eq!(last["bound"][0]["param"], "lights[0].intensity");
+    assert_eq!(last["bound"][0]["value"].as_f64(), Some(1.6), "{last}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_osc_port_in_use_stops_fathom_explore_before_its_window_with_the_port_named() {
+    let taken = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port();
+    let out = Command::new(env!("CARGO_BIN_EXE_fathom"))
+        .args([
+            "explore",
+            "--preset",
+            "sierpinski",
+            "--osc-port",
+            &port.to_string(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(stderr.contains(&format!("127.0.0.1:{port}")), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
