@@ -96,10 +96,9 @@ pub enum ZoomError {
         "nothing to zoom into: {what} misses the surface of {scene}; aim at a pixel that shows the surface (--pixel X,Y) or toward a point on it (--toward x,y,z)"
     )]
     Miss { scene: String, what: String },
-    /// The octree's root cube (fitted to the surface inside [-4, 4]^3) does not contain the
-    /// zoom target: the zoom would end on sky.
+    /// The octree's root cube does not contain the zoom target: the zoom would end on sky.
     #[error(
-        "the zoom target {x},{y},{z} lies outside the octree's root cube (corner {min_x},{min_y},{min_z}, side {side}); the octree fits its root to the surface inside [-4, 4]^3, so aim at a part of the scene inside that cube"
+        "the zoom target {x},{y},{z} lies outside the octree's root cube (corner {min_x},{min_y},{min_z}, side {side}); the octree fits its root to the surface inside a cube around the origin 1.5 times the target's largest coordinate (at least [-4, 4]^3), so the surface there was not found"
     )]
     OutsideRoot {
         x: f64,
@@ -193,9 +192,14 @@ impl ZoomPath {
             what,
         };
         let target = match aim {
-            Aim::View => view_target(&tape, view).ok_or_else(|| {
-                miss("the view's centre ray (and 63 rays on a spiral around it)".into())
-            })?,
+            Aim::View => view_target(&tape, view)
+                .or_else(|| {
+                    let d = view.frame().ray_dir(0.5, 0.5, 1, 1);
+                    near_surface_point(&tape, eye, d)
+                })
+                .ok_or_else(|| {
+                    miss("the view's centre ray (and 63 rays on a spiral around it)".into())
+                })?,
             Aim::Toward(p) => {
                 let dir = (p - eye).normalize_or_zero();
                 if !p.is_finite() || dir == DVec3::ZERO {
@@ -208,7 +212,7 @@ impl ZoomPath {
                         eye_z: eye.z,
                     });
                 }
-                surface_point(&tape, eye, dir).ok_or_else(|| {
+                target_on(&tape, eye, dir).ok_or_else(|| {
                     miss(format!(
                         "the ray from the eye {:.4},{:.4},{:.4} toward {},{},{} (direction {:.4},{:.4},{:.4})",
                         eye.x, eye.y, eye.z, p.x, p.y, p.z, dir.x, dir.y, dir.z
@@ -232,7 +236,7 @@ impl ZoomPath {
                 let dir = view
                     .frame()
                     .ray_dir(x as f64 + 0.5, y as f64 + 0.5, width, height);
-                surface_point(&tape, eye, dir).ok_or_else(|| {
+                target_on(&tape, eye, dir).ok_or_else(|| {
                     miss(format!(
                         "the ray through pixel {x},{y} of the {width}x{height} view (direction {:.4},{:.4},{:.4})",
                         dir.x, dir.y, dir.z
@@ -257,6 +261,42 @@ impl ZoomPath {
     pub fn camera(&self, i: usize, frames: usize, depth: f64) -> Camera {
         self.path.camera(i, frames, depth, self.fov)
     }
+}
+
+/// The zoom target along the ray from `eye` along unit `dir`: the surface point bracketed to
+/// f64 precision ([`surface_point`]), or, for estimators that never go inside along the ray,
+/// [`near_surface_point`].
+fn target_on(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> {
+    surface_point(tape, eye, dir).or_else(|| near_surface_point(tape, eye, dir))
+}
+
+/// Relative distance (of the distance travelled) below which [`near_surface_point`] stops.
+pub const NEAR_SURFACE: f64 = 1e-7;
+
+/// For estimators that stay positive near their set (the mandelbox preset's estimate creeps
+/// along the view's centre ray at 1e-4 for thousands of steps and never goes inside, so
+/// nothing can be bracketed): the first point of the ray from `eye` along `dir` where the
+/// estimate is below [`NEAR_SURFACE`] of the distance travelled, tracing with half steps (at
+/// most 10^6 of them, within 100 world units). A zoom into it is sharp to zoom ~10^7; past
+/// that the estimator itself is the limit.
+pub fn near_surface_point(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> {
+    let mut ev = fathom_core::Evaluator::<f64>::new();
+    let mut t = 0.0f64;
+    for _ in 0..1_000_000 {
+        let p = eye + dir * t;
+        let d = ev.distance(tape, fathom_core::V3::new(p.x, p.y, p.z));
+        if !(d > 0.0) {
+            return None;
+        }
+        if d < NEAR_SURFACE * t.max(1.0) {
+            return Some(p);
+        }
+        t += 0.5 * d;
+        if t > 100.0 {
+            return None;
+        }
+    }
+    None
 }
 
 /// The JSON written by `fathom zoom --stats`.
@@ -306,6 +346,10 @@ impl Zoom {
         req.backend = Backend::Octree;
         if preset.cube.is_some() {
             req.octree.root = preset.cube;
+        } else if let Some(t) = preset.path.target() {
+            // Fit the root inside a cube that holds the target with room around it (scenes
+            // larger than the default [-4, 4]^3, such as the mandelbox preset, would be cut).
+            req.octree.fit_half = req.octree.fit_half.max(1.5 * t.abs().max_element());
         }
         let mut session = Session::new(preset.scene.clone())?;
         let mut reference = match self.compare_every {

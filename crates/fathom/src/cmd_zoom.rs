@@ -348,13 +348,13 @@ mod tests {
             let last = r.frames.last().unwrap();
             assert!(last.hits > 0, "{}: the last frame shows no surface", p.name);
         }
-        // A user's scene file: the sierpinski preset's text saved to disk, aimed at a pixel.
+        // A user's scene file: the mandelbulb preset's text saved to disk, aimed at a pixel.
         let dir = std::env::temp_dir().join(format!("fathom-zoom-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("mine.ron");
         std::fs::write(
             &file,
-            fathom_core::presets::find("sierpinski").unwrap().text,
+            fathom_core::presets::find("mandelbulb").unwrap().text,
         )
         .unwrap();
         let mut a = args();
