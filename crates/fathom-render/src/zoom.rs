@@ -179,7 +179,7 @@ impl ZoomPath {
         })?;
         let eye = view.eye;
         let d0 = tape.eval_f64([eye.x, eye.y, eye.z]).d;
-        if !(d0 > 0.0) {
+        if d0 <= 0.0 || d0.is_nan() {
             return Err(ZoomError::EyeInside {
                 scene: name.into(),
                 x: eye.x,
@@ -285,7 +285,7 @@ pub fn near_surface_point(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> 
     for _ in 0..1_000_000 {
         let p = eye + dir * t;
         let d = ev.distance(tape, fathom_core::V3::new(p.x, p.y, p.z));
-        if !(d > 0.0) {
+        if d <= 0.0 || d.is_nan() {
             return None;
         }
         if d < NEAR_SURFACE * t.max(1.0) {
