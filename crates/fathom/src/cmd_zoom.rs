@@ -43,7 +43,7 @@ impl From<TraversalArg> for Traversal {
 ///
 /// Examples:
 ///   fathom zoom --preset menger --depth 1e11 --frames 300 --stats zoom.json
-///   fathom zoom --preset sierpinski --pixel 320,200 --depth 1e9 -o frames/
+///   fathom zoom --preset sierpinski --pixel 320,160 --depth 1e9 -o frames/
 ///   fathom zoom my-scene.ron --toward 0.3,0.2,1 --depth 1e8 --stats z.json
 ///   fathom zoom --preset mandelbulb --compare-every 10 --stats z.json   (vs the tracer)
 ///   fathom zoom --preset mandelbulb --frames 600 -o frames/        (PNG per frame)
