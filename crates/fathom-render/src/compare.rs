@@ -173,3 +173,44 @@ impl Reference {
         Ok(self.session.render(cam, &self.req)?.frame)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(w: u32, h: u32, f: impl Fn(u32, u32) -> Option<f32>) -> Frame {
+        let mut fr = Frame::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                if let Some(v) = f(x, y) {
+                    let i = (y * w + x) as usize;
+                    fr.colour[i] = [v; 3];
+                    fr.depth[i] = 1.0;
+                }
+            }
+        }
+        fr
+    }
+
+    #[test]
+    fn identical_frames_agree_fully_and_different_ones_do_not() {
+        let a = frame(32, 24, |x, y| {
+            (x > 4).then_some(((x * 7 + y * 3) % 11) as f32 / 11.0)
+        });
+        let same = agreement(&a, &a);
+        assert!((same.ssim - 1.0).abs() < 1e-9, "{same:?}");
+        assert_eq!(
+            (same.iou, same.colour_error, same.colour_within),
+            (1.0, 0.0, 1.0)
+        );
+        // Flat colour where `a` has texture: silhouettes agree, structure does not.
+        let flat = frame(32, 24, |x, _| (x > 4).then_some(0.45));
+        let d = agreement(&a, &flat);
+        assert_eq!(d.iou, 1.0);
+        assert!(d.ssim < 0.5, "{d:?}");
+        assert!(d.colour_error > 0.05 && d.colour_within < 1.0, "{d:?}");
+        // Half the silhouette missing.
+        let half = frame(32, 24, |x, y| (x > 4 && y < 12).then_some(0.45));
+        assert!((agreement(&a, &half).iou - 0.5).abs() < 1e-9);
+    }
+}
