@@ -238,8 +238,6 @@ pub struct Explorer {
     pool: rayon::ThreadPool,
     skip: Option<(u32, BoxU)>,
     frame: u64,
-    /// Angle of one pixel at the last rendered camera (children's size in pixels).
-    pixel_angle: f64,
 }
 
 impl Explorer {
@@ -266,7 +264,6 @@ impl Explorer {
             pool,
             skip: None,
             frame: 0,
-            pixel_angle: 1.0,
         })
     }
 
@@ -332,7 +329,7 @@ impl Explorer {
             if n.is_empty() || !n.is_leaf() || b.depth >= crate::octree::MAX_DEPTH {
                 return;
             }
-            let r = eval_children(&self.shader, &self.tree, &mut ev, id, b, f64::INFINITY);
+            let r = eval_children(&self.shader, &self.tree, &mut ev, id, b);
             if apply(&mut self.tree, &r) == Outcome::NoMemory {
                 return;
             }
@@ -345,7 +342,6 @@ impl Explorer {
     /// the subdivision requests and (rays, hits, node steps).
     pub fn render(&mut self, cam: &Camera) -> (SvoImage, Vec<Request>, [u64; 3]) {
         let frame = cam.frame();
-        self.pixel_angle = frame.pixel_angle(self.cfg.height);
         self.shader.view = View {
             eye: cam.eye,
             scale: (cam.target - cam.eye).length().max(1e-300),
@@ -437,12 +433,11 @@ impl Explorer {
             let chunk = &reqs[next..end];
             let tree = &self.tree;
             let sh = &self.shader;
-            let pa = self.pixel_angle;
             let results: Vec<Children> = self.pool.install(|| {
                 chunk
                     .par_iter()
                     .map_init(Evaluator::<f64>::new, |ev, r| {
-                        eval_children(sh, tree, ev, r.id, r.b, 0.5 * r.footprint() / pa)
+                        eval_children(sh, tree, ev, r.id, r.b)
                     })
                     .collect()
             });

@@ -43,10 +43,6 @@ pub struct View {
     pub scale: f64,
 }
 
-/// Voxels larger than this many pixels (as seen by the ray that asked for their parent) are
-/// coloured the cheap way: they are on screen only until they are split in turn.
-pub const FULL_SHADING_PX: f64 = 2.0;
-
 /// Everything needed to decide and colour voxels: the tape plus shading constants.
 pub struct Shader {
     /// The compiled scene.
@@ -170,12 +166,9 @@ impl Shader {
         c: DVec3,
         h: f64,
         v: &fathom_core::Value<f64>,
-        cheap: bool,
     ) -> u32 {
         let h = h.max(1e-300);
-        let (p, v) = if cheap {
-            (c, *v)
-        } else if self.gradient_shading && v.d.is_finite() {
+        let (p, v) = if self.gradient_shading && v.d.is_finite() {
             self.surface_point(ev, c, h).unwrap_or((c, *v))
         } else {
             (c, *v)
@@ -205,16 +198,11 @@ impl Shader {
         if !self.gradient_shading {
             return pack_rgb(base);
         }
-        let n = if cheap {
-            let n = ev.normal(&self.tape, V3::new(p.x, p.y, p.z), h);
-            DVec3::new(n.x, n.y, n.z)
-        } else {
-            central_gradient(ev, &self.tape, p, h).normalize_or(DVec3::Y)
-        };
+        let n = central_gradient(ev, &self.tape, p, h).normalize_or(DVec3::Y);
         // Distance-field ambient occlusion, as the tracer computes it.
         let range = 0.05 * self.view.scale;
         let (mut occ, mut w, mut wsum) = (0.0, 1.0, 0.0);
-        for i in 0..if cheap { 0 } else { AO_SAMPLES } {
+        for i in 0..AO_SAMPLES {
             let hh = range * (0.1 + 0.9 * i as f64 / (AO_SAMPLES - 1) as f64);
             let q = p + n * hh;
             let d = ev.distance(&self.tape, V3::new(q.x, q.y, q.z));
@@ -222,7 +210,7 @@ impl Shader {
             wsum += 0.7f64.powi(i as i32);
             w *= 0.7;
         }
-        let ao = (1.0 - self.ao / wsum.max(1e-12) * occ).clamp(0.0, 1.0);
+        let ao = (1.0 - self.ao / wsum * occ).clamp(0.0, 1.0);
         let hemi = 0.7 + 0.3 * n.y;
         let mut col = base.map(|b| b * self.ambient * ao * hemi);
         let view = (self.view.eye - p).normalize_or(n);
@@ -326,9 +314,7 @@ pub fn eval_children(
     ev: &mut Evaluator<f64>,
     id: u32,
     b: BoxU,
-    child_px: f64,
 ) -> Children {
-    let cheap = child_px > FULL_SHADING_PX || child_px.is_nan();
     let mut out = Children {
         id,
         b,
@@ -360,7 +346,7 @@ pub fn eval_children(
         }
         if full {
             out.full |= 1 << o;
-            out.colours[o] = sh.colour(ev, c, side * 0.5, &v, cheap);
+            out.colours[o] = sh.colour(ev, c, side * 0.5, &v);
         }
     }
     out
@@ -507,7 +493,7 @@ pub fn init_root(tree: &mut Octree, sh: &Shader) {
     let hd = tree.root_size * 0.5 * 3f64.sqrt();
     let n = &mut tree.nodes[0];
     match sh.full(&mut ev, c, hd) {
-        Some(v) => n.colour = sh.colour(&mut ev, c, tree.root_size * 0.5, &v, true),
+        Some(v) => n.colour = sh.colour(&mut ev, c, tree.root_size * 0.5, &v),
         None => *n.flags.get_mut() |= EMPTY,
     }
 }
