@@ -16,7 +16,17 @@ have mandelbulber2 || need+=(mandelbulber2)
 # ffmpeg: `fathom render --path` makes a video of a flight path's frames with it, and a test
 # (crates/fathom/src/cmd_flight.rs) makes one.
 have ffmpeg || need+=(ffmpeg)
-# (window tests add their packages here: xvfb ...)
+# Slurm: scripts/slurm-local.sh runs a one-node cluster (munge, slurmctld, slurmd) for the
+# render-farm test (scripts/farm-slurm-test.sh); it starts them itself, by PID, never as services.
+for p in slurmctld slurmd slurm-client munge; do
+  have "$p" || need+=("$p")
+done
+# The window smoke test (crates/fathom/tests/window_smoke.rs) runs the real explorer window on
+# a virtual X server: xvfb-run starts Xvfb (with an xauth cookie) for the one command and
+# stops it afterwards.
+for p in xvfb xauth; do
+  have "$p" || need+=("$p")
+done
 
 if [ ${#need[@]} -gt 0 ]; then
   echo "setup: installing ${need[*]}"

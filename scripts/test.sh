@@ -13,3 +13,5 @@ echo "== clippy"
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 echo "== tests"
 cargo test --workspace
+echo "== render farm on a local Slurm cluster"
+bash scripts/farm-slurm-test.sh

@@ -17,6 +17,7 @@ use crate::tree::{self, NodePath, TreeAction};
 use crate::viewport::{Viewport, view_key};
 use crate::worker::{Reply, Stage, Worker};
 use crate::{input, look};
+use egui::emath::GuiRounding;
 use fathom_core::presets::{self, PRESETS};
 use fathom_core::{Projection, Scene, Tape, scene_file};
 use fathom_render::{Backend, RenderRequest, TracerRule};
@@ -80,6 +81,9 @@ pub struct ViewSettings {
     pub stereo: Stereo,
     pub eye_separation: f64,
     pub fidelity: f64,
+    /// Density grid, extinction, albedo and samples of the volume renderer (the scene as a
+    /// cloud).
+    pub volume: fathom_render::request::VolumeSettings,
 }
 
 impl ViewSettings {
@@ -102,6 +106,7 @@ impl ViewSettings {
             ..RenderRequest::default()
         };
         r.octree.fidelity = self.fidelity;
+        r.volume = self.volume.clone();
         r
     }
 }
@@ -143,6 +148,10 @@ pub struct ExplorerApp {
     pub settings: ViewSettings,
     pub viewport: Viewport,
     worker: Worker,
+    /// The window's GPU (when it has one), to give a replacement worker a renderer.
+    render_state: Option<egui_wgpu::RenderState>,
+    /// Workers started to replace one that stopped.
+    pub worker_restarts: u64,
     pub selected: NodePath,
     notes: Vec<Note>,
     browser: FileBrowser,
@@ -160,6 +169,12 @@ pub struct ExplorerApp {
     /// Recompilations the worker had done when the last frame came back.
     pub compiles: u64,
     viewport_px: (u32, u32),
+    /// The viewport's rectangle in points (whole pixels), as last laid out.
+    pub viewport_rect: egui::Rect,
+    /// Whether the side panels are shown (F2 hides them for a full-width view).
+    pub show_panels: bool,
+    /// Whether the stats overlay is drawn over the viewport (F3).
+    pub show_overlay: bool,
     show_help: bool,
     tree_actions: Vec<TreeAction>,
     exit_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
@@ -173,7 +188,7 @@ impl ExplorerApp {
     ) -> Result<ExplorerApp, String> {
         let ctx = cc.egui_ctx.clone();
         let tape = Tape::compile(&opts.scene).map_err(|e| e.to_string())?;
-        let worker = Worker::start(opts.scene.clone(), move || ctx.request_repaint())
+        let worker = Worker::start(opts.scene.clone(), 0, move || ctx.request_repaint())
             .map_err(|e| e.to_string())?;
         let mut backend = opts.backend.unwrap_or(Backend::Trace);
         let mut notes = Vec::new();
@@ -184,8 +199,7 @@ impl ExplorerApp {
                 backend = Backend::Gpu;
             }
             if backend == Backend::Gpu {
-                let gpu = fathom_gpu::Gpu::from_device(rs.device.clone(), rs.queue.clone(), info);
-                match fathom_gpu::Renderer::new(gpu) {
+                match gpu_renderer(rs) {
                     Ok(r) => worker.set_gpu(r),
                     Err(e) => {
                         backend = Backend::Trace;
@@ -223,9 +237,12 @@ impl ExplorerApp {
                 stereo: Stereo::Mono,
                 eye_separation: 0.065,
                 fidelity: 1.0,
+                volume: Default::default(),
             },
             viewport: Viewport::new(opts.target_ms),
             worker,
+            render_state: cc.wgpu_render_state.clone(),
+            worker_restarts: 0,
             selected: Vec::new(),
             notes,
             browser: FileBrowser::default(),
@@ -247,6 +264,9 @@ impl ExplorerApp {
             edit_latency_ms: None,
             compiles: 1,
             viewport_px: (0, 0),
+            viewport_rect: egui::Rect::NOTHING,
+            show_panels: true,
+            show_overlay: true,
             show_help: false,
             tree_actions: Vec::new(),
             exit_error: opts.exit_error,
@@ -442,8 +462,64 @@ impl ExplorerApp {
                         self.note(format!("the renderer refused the edit: {e}"), true);
                     }
                 }
+                Reply::Stopped(why) => {
+                    self.replace_worker(ctx, &why);
+                    return;
+                }
             }
         }
+    }
+
+    /// Starts a fresh worker on the current scene after the last one stopped. The view it was
+    /// rendering is marked failed (so a frame that panics every time is not retried in a
+    /// loop); any other view renders as usual.
+    fn replace_worker(&mut self, ctx: &egui::Context, why: &str) {
+        self.viewport.worker_lost();
+        let wake = ctx.clone();
+        match Worker::start(self.scene.clone(), self.generation, move || {
+            wake.request_repaint()
+        }) {
+            Ok(w) => {
+                self.worker = w;
+                self.worker_restarts += 1;
+                self.pending_edit = None;
+                self.note(format!("{why}; started a new render worker"), true);
+                if self.settings.backend == Backend::Gpu
+                    && let Some(rs) = &self.render_state
+                {
+                    match gpu_renderer(rs) {
+                        Ok(r) => self.worker.set_gpu(r),
+                        Err(e) => {
+                            self.settings.backend = Backend::Trace;
+                            self.note(
+                                format!(
+                                    "the GPU renderer could not start ({e}); using the CPU tracer"
+                                ),
+                                true,
+                            );
+                        }
+                    }
+                }
+            }
+            Err(e) => self.note(
+                format!("{why}; a new render worker could not start: {e}"),
+                true,
+            ),
+        }
+    }
+
+    /// Makes the render worker panic, as a renderer bug would (for the fault tests).
+    #[doc(hidden)]
+    pub fn inject_worker_panic(&self) {
+        self.worker.inject_panic();
+    }
+
+    /// The status bar's messages, oldest first, with whether each is an error.
+    pub fn notes(&self) -> Vec<(String, bool)> {
+        self.notes
+            .iter()
+            .map(|n| (n.text.clone(), n.error))
+            .collect()
     }
 
     /// The watched file, dropped files, finished screenshots.
@@ -520,6 +596,13 @@ impl ExplorerApp {
         }
         if ctx.egui_wants_keyboard_input() {
             return;
+        }
+        let (f2, f3) = ctx.input(|i| (i.key_pressed(Key::F2), i.key_pressed(Key::F3)));
+        if f2 {
+            self.show_panels = !self.show_panels;
+        }
+        if f3 {
+            self.show_overlay = !self.show_overlay;
         }
         let (f12, digits, ctrl) = ctx.input(|i| {
             let digits: Vec<usize> = (1..=9)
@@ -617,6 +700,8 @@ impl ExplorerApp {
                     if let Some(i) = go {
                         self.camera = self.bookmarks[i].1.clone();
                     }
+                    ui.checkbox(&mut self.show_panels, "Side panels (F2)");
+                    ui.checkbox(&mut self.show_overlay, "Stats overlay (F3)");
                     if ui.button("Fly (leave orbit)").clicked() {
                         self.camera.mode = Mode::Fly;
                         ui.close();
@@ -670,9 +755,10 @@ impl ExplorerApp {
 
     fn left_panel(&mut self, ui: &mut egui::Ui) {
         let mut actions: Vec<TreeAction> = Vec::new();
+        let width = ui.ctx().content_rect().width();
         egui::Panel::left("scene")
             .resizable(true)
-            .default_size(280.0)
+            .default_size((0.22 * width).clamp(140.0, 280.0))
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
                     ui.heading("Scene");
@@ -743,9 +829,10 @@ impl ExplorerApp {
     }
 
     fn right_panel(&mut self, ui: &mut egui::Ui) {
+        let width = ui.ctx().content_rect().width();
         egui::Panel::right("inspector")
             .resizable(true)
-            .default_size(300.0)
+            .default_size((0.24 * width).clamp(150.0, 300.0))
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
                     ui.heading("Node");
@@ -775,11 +862,17 @@ impl ExplorerApp {
                 Backend::Trace => "CPU tracer",
                 Backend::Gpu => "GPU tracer",
                 Backend::Octree => "octree",
+                Backend::Volume => "volume (cloud)",
             })
             .show_ui(ui, |ui| {
                 ui.selectable_value(&mut s.backend, Backend::Trace, "CPU tracer");
                 ui.selectable_value(&mut s.backend, Backend::Gpu, "GPU tracer");
                 ui.selectable_value(&mut s.backend, Backend::Octree, "octree");
+                ui.selectable_value(&mut s.backend, Backend::Volume, "volume (cloud)")
+                    .on_hover_text(
+                        "the scene's interior as a cloud, path-traced (fathom-volume); \
+                         refines while the view is still",
+                    );
             });
         ui.horizontal(|ui| {
             ui.label("step rule");
@@ -795,6 +888,18 @@ impl ExplorerApp {
                     .text("voxel size (px)"),
             );
         }
+        if s.backend == Backend::Volume {
+            let v = &mut s.volume;
+            ui.add(egui::Slider::new(&mut v.grid, 16..=256).text("density grid"));
+            ui.add(
+                egui::Slider::new(&mut v.density_scale, 0.1..=200.0)
+                    .logarithmic(true)
+                    .text("extinction"),
+            );
+            ui.add(egui::Slider::new(&mut v.albedo, 0.0..=1.0).text("albedo"));
+            ui.add(egui::Slider::new(&mut v.g, -0.95..=0.95).text("anisotropy g"));
+            ui.add(egui::Slider::new(&mut v.spp, 1..=64).text("samples per frame"));
+        }
         ui.horizontal(|ui| {
             ui.label("stereo");
             ui.selectable_value(&mut s.stereo, Stereo::Mono, "mono");
@@ -808,7 +913,7 @@ impl ExplorerApp {
                     .text("eye separation"),
             );
         }
-        if s.backend == Backend::Octree && s.stereo != Stereo::Mono {
+        if matches!(s.backend, Backend::Octree | Backend::Volume) && s.stereo != Stereo::Mono {
             s.stereo = Stereo::Mono;
         }
         let mut target = self.viewport.scale.target_ms();
@@ -826,9 +931,11 @@ impl ExplorerApp {
     /// The viewport: camera input, the frame, the stats overlay. Returns its size in pixels.
     fn central(&mut self, ui: &mut egui::Ui, dt: f64) {
         egui::CentralPanel::no_frame().show(ui, |ui| {
-            let rect = ui.available_rect_before_wrap();
-            let r = ui.allocate_rect(rect, egui::Sense::click_and_drag());
             let ppp = ui.ctx().pixels_per_point();
+            // Whole pixels, so the frame's texels land on the screen's pixels one to one.
+            let rect = ui.available_rect_before_wrap().round_to_pixels(ppp);
+            self.viewport_rect = rect;
+            let r = ui.allocate_rect(rect, egui::Sense::click_and_drag());
             self.viewport_px = (
                 (rect.width() * ppp).round().max(0.0) as u32,
                 (rect.height() * ppp).round().max(0.0) as u32,
@@ -864,7 +971,9 @@ impl ExplorerApp {
                     egui::Color32::WHITE,
                 );
             }
-            self.overlay(&painter, rect);
+            if self.show_overlay {
+                self.overlay(&painter, rect);
+            }
         });
     }
 
@@ -995,6 +1104,7 @@ impl ExplorerApp {
             stereo,
             backend: match self.settings.backend {
                 Backend::Octree => Backend::Octree,
+                Backend::Volume => Backend::Volume,
                 _ => Backend::Trace,
             },
             ..self.settings.clone()
@@ -1054,7 +1164,10 @@ impl ExplorerApp {
             compiles: self.compiles,
             camera: cam.clone(),
         };
-        if let Err(e) = self.script.log(&line) {
+        // Frames eframe still runs after the scripted run asked to close are not logged.
+        if !self.script.closing
+            && let Err(e) = self.script.log(&line)
+        {
             self.note(e, true);
         }
         if self.script.finished(self.frames) && !self.script.closing {
@@ -1092,6 +1205,13 @@ impl ExplorerApp {
     }
 }
 
+/// A GPU renderer on the window's device.
+fn gpu_renderer(rs: &egui_wgpu::RenderState) -> Result<fathom_gpu::Renderer, fathom_gpu::GpuError> {
+    let info = rs.adapter.get_info();
+    let gpu = fathom_gpu::Gpu::from_device(rs.device.clone(), rs.queue.clone(), info);
+    fathom_gpu::Renderer::new(gpu)
+}
+
 fn path_text(p: &NodePath) -> String {
     p.iter().map(|i| format!(".children[{i}]")).collect()
 }
@@ -1109,8 +1229,10 @@ impl eframe::App for ExplorerApp {
         let before = self.scene.clone();
         self.menu_bar(ui);
         self.status_bar(ui);
-        self.left_panel(ui);
-        self.right_panel(ui);
+        if self.show_panels {
+            self.left_panel(ui);
+            self.right_panel(ui);
+        }
         self.central(ui, dt);
         self.dialogs(&ctx);
         self.commit(&ctx, before);

@@ -57,5 +57,6 @@ Shift    4x faster           drag     look around (orbit when a point is picked)
 click    orbit around the surface point under the cursor (click the sky to fly again)
 wheel    towards the surface or the pivot     Ctrl+wheel, + / -   field of view
 Ctrl+Z / Ctrl+Y   undo / redo     Ctrl+S save     Ctrl+O open     F12 screenshot
+F2       side panels on / off      F3       stats overlay on / off
 1..9     jump to bookmark          Ctrl+1..9   store a bookmark
 Speeds follow the distance to the surface, so a dive feels the same at every depth.";

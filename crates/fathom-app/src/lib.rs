@@ -11,9 +11,11 @@
 //! - [`camera`], [`input`]: the camera and the controls;
 //! - [`params`], [`tree`], [`look`]: panels generated from the registry;
 //! - [`history`]: undo and redo; [`files`]: open, save, watch; [`shot`]: screenshots;
-//! - [`script`]: `--frames`, `--screenshot`, `--log`.
+//! - [`script`]: `--frames`, `--screenshot`, `--log`;
+//! - [`bench`]: the explorer's numbers without a window (`fathom bench explore`).
 
 pub mod app;
+pub mod bench;
 pub mod camera;
 pub mod files;
 pub mod history;
@@ -36,8 +38,20 @@ pub fn display_available() -> bool {
         .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
 }
 
+/// Why the window did not run.
+#[derive(Debug, thiserror::Error)]
+pub enum WindowError {
+    /// No window could be opened here (no display server answered, or no graphics device
+    /// could draw into it); nothing was shown.
+    #[error("no window could be opened: {0}")]
+    Unavailable(String),
+    /// The window opened (or was about to) and then failed, or a scripted run failed.
+    #[error("{0}")]
+    Failed(String),
+}
+
 /// Opens the explorer window and runs it until it is closed.
-pub fn run(opts: ExploreOptions) -> Result<(), String> {
+pub fn run(opts: ExploreOptions) -> Result<(), WindowError> {
     let title = format!("fathom - {}", opts.name);
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
@@ -48,14 +62,26 @@ pub fn run(opts: ExploreOptions) -> Result<(), String> {
         ..Default::default()
     };
     let failed = opts.exit_error.clone();
-    eframe::run_native(
+    // Set once eframe has a window and a device and asks for the app.
+    let opened = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let opened_in = opened.clone();
+    let r = eframe::run_native(
         "fathom",
         native,
-        Box::new(move |cc| Ok(Box::new(ExplorerApp::new(cc, opts)?))),
-    )
-    .map_err(|e| format!("the window could not run: {e}"))?;
+        Box::new(move |cc| {
+            opened_in.store(true, std::sync::atomic::Ordering::SeqCst);
+            Ok(Box::new(ExplorerApp::new(cc, opts)?))
+        }),
+    );
+    if let Err(e) = r {
+        return Err(if opened.load(std::sync::atomic::Ordering::SeqCst) {
+            WindowError::Failed(format!("the window could not run: {e}"))
+        } else {
+            WindowError::Unavailable(e.to_string())
+        });
+    }
     match failed.lock().ok().and_then(|g| g.clone()) {
-        Some(e) => Err(e),
+        Some(e) => Err(WindowError::Failed(e)),
         None => Ok(()),
     }
 }

@@ -8,6 +8,12 @@
 //! finish (it is short) unless it has run past twice the target. Octree frames step the tree
 //! instead, at full resolution (the octree holds its frame time by its subdivision budget),
 //! until it asks for no more subdivision.
+//!
+//! A GPU frame cannot be cancelled once submitted, so on the GPU the first refinement waits
+//! until the view has held still for [`GPU_REFINE_DELAY_MS`]: a slider dragged slowly (or a
+//! camera nudged key by key) would otherwise start a full-resolution frame between two of its
+//! steps and the next step would wait for it. The CPU tracer's refinements start at once (they
+//! stop at the next tile when the view moves).
 
 use crate::scale::RenderScale;
 use crate::worker::{FrameDone, FrameFailure, FrameJob, Picture, Stage, Worker};
@@ -15,6 +21,9 @@ use fathom_core::Camera;
 use fathom_render::{Backend, CancelToken, RenderRequest, Stats};
 use std::hash::{Hash, Hasher};
 use std::time::Instant;
+
+/// How long the view must hold still before the GPU starts refining it, ms.
+pub const GPU_REFINE_DELAY_MS: f64 = 150.0;
 
 /// A frame being rendered.
 struct InFlight {
@@ -56,6 +65,8 @@ pub struct Viewport {
     pub error: Option<String>,
     /// The key whose stillness `still_since` times.
     still_key: Option<u64>,
+    /// A view whose frame was lost with its worker: not asked for again until the view changes.
+    failed_key: Option<u64>,
 }
 
 /// The view a frame is of: everything that changes its pixels.
@@ -87,6 +98,7 @@ impl Viewport {
             full_after_still_ms: None,
             error: None,
             still_key: None,
+            failed_key: None,
         }
     }
 
@@ -167,6 +179,10 @@ impl Viewport {
         if w == 0 || h == 0 {
             return; // minimised or collapsed: nothing to draw
         }
+        if self.failed_key == Some(key) {
+            return;
+        }
+        self.failed_key = None;
         if self.shown.as_ref().is_none_or(|s| s.key != key)
             && self.in_flight.as_ref().is_none_or(|f| f.key != key)
         {
@@ -196,6 +212,12 @@ impl Viewport {
                     }
                     Stage::Interactive
                 } else if s.stage == Stage::Interactive {
+                    let still_ms = self
+                        .still_since
+                        .map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64() * 1e3);
+                    if base.backend == Backend::Gpu && still_ms < GPU_REFINE_DELAY_MS {
+                        return;
+                    }
                     Stage::Full
                 } else if s.stage == Stage::Full && self.refine_supersample > 1 {
                     Stage::Supersampled
@@ -247,6 +269,19 @@ impl Viewport {
             cancel,
             sent: Instant::now(),
         });
+    }
+
+    /// The worker stopped: the frame in flight never comes back. Its view is marked failed
+    /// and not asked for again until the view changes.
+    pub fn worker_lost(&mut self) {
+        if let Some(f) = self.in_flight.take() {
+            self.failed_key = Some(f.key);
+        }
+    }
+
+    /// Frames asked of the worker so far.
+    pub fn frames_asked(&self) -> u64 {
+        self.next_id
     }
 
     /// Whether a frame is being rendered.

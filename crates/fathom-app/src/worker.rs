@@ -5,6 +5,10 @@
 //! structure edit), converts the frame to an image the window uploads as is, and wakes the
 //! window. Each job carries its own [`CancelToken`]: the window cancels a job that went stale
 //! without any risk of cancelling the next one.
+//!
+//! A worker that panics (a bug in a renderer, say) reports [`Reply::Stopped`] with the panic's
+//! message and ends; a worker thread that vanished without a word is reported the same way by
+//! [`Worker::poll`]. The window then starts a fresh worker on its own copy of the scene.
 
 use fathom_core::{Camera, Scene};
 use fathom_render::{
@@ -87,6 +91,9 @@ pub struct SceneApplied {
 pub enum Reply {
     Frame(Box<FrameDone>),
     Scene(SceneApplied),
+    /// The worker stopped (it panicked, or its thread is gone) and renders nothing more; the
+    /// frame it was rendering never comes back. Carries what is known of why.
+    Stopped(String),
 }
 
 enum Msg {
@@ -97,29 +104,57 @@ enum Msg {
     },
     Frame(Box<FrameJob>),
     Gpu(Box<fathom_gpu::Renderer>),
+    /// Fault injection for tests: panic in the worker thread.
+    Panic,
 }
 
 /// The window's side of the worker.
 pub struct Worker {
     tx: Sender<Msg>,
     rx: Receiver<Reply>,
+    /// Whether [`Reply::Stopped`] was already reported.
+    stopped: bool,
 }
 
 impl Worker {
-    /// Starts a worker on a session of `scene` (which must validate). `wake` is called after
-    /// every reply (the window passes `egui::Context::request_repaint`).
-    pub fn start(scene: Scene, wake: impl Fn() + Send + 'static) -> Result<Worker, RenderError> {
+    /// Starts a worker on a session of `scene` (which must validate), whose frames report
+    /// scene generation `generation` until the first edit. `wake` is called after every reply
+    /// (the window passes `egui::Context::request_repaint`).
+    pub fn start(
+        scene: Scene,
+        generation: u64,
+        wake: impl Fn() + Send + 'static,
+    ) -> Result<Worker, RenderError> {
         let session = Session::new(scene)?;
         let (tx, worker_rx) = channel::<Msg>();
         let (worker_tx, rx) = channel::<Reply>();
         std::thread::Builder::new()
             .name("fathom render worker".into())
-            .spawn(move || run(session, worker_rx, worker_tx, wake))
+            .spawn(move || {
+                let report = worker_tx.clone();
+                let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    run(session, generation, worker_rx, worker_tx, &wake)
+                }));
+                if let Err(p) = r {
+                    let why = p
+                        .downcast_ref::<&str>()
+                        .map(|s| s.to_string())
+                        .or_else(|| p.downcast_ref::<String>().cloned())
+                        .unwrap_or_else(|| "a panic without a message".into());
+                    let _ =
+                        report.send(Reply::Stopped(format!("the render worker panicked: {why}")));
+                    wake();
+                }
+            })
             .map_err(|e| RenderError::Threads {
                 threads: 1,
                 message: e.to_string(),
             })?;
-        Ok(Worker { tx, rx })
+        Ok(Worker {
+            tx,
+            rx,
+            stopped: false,
+        })
     }
 
     /// Sends an edited scene (generation `generation`).
@@ -141,14 +176,51 @@ impl Worker {
         let _ = self.tx.send(Msg::Gpu(Box::new(r)));
     }
 
-    /// Replies so far, without waiting.
-    pub fn poll(&self) -> Vec<Reply> {
-        self.rx.try_iter().collect()
+    /// Makes the worker thread panic, as a bug in a renderer would: how the tests check that
+    /// the window notices and replaces it. Not for anything else.
+    #[doc(hidden)]
+    pub fn inject_panic(&self) {
+        let _ = self.tx.send(Msg::Panic);
+    }
+
+    /// Replies so far, without waiting. Ends with [`Reply::Stopped`] (once) when the worker
+    /// has stopped.
+    pub fn poll(&mut self) -> Vec<Reply> {
+        let mut out = Vec::new();
+        loop {
+            match self.rx.try_recv() {
+                Ok(r) => {
+                    if matches!(r, Reply::Stopped(_)) {
+                        self.stopped = true;
+                    }
+                    out.push(r);
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => {
+                    if !self.stopped {
+                        self.stopped = true;
+                        out.push(Reply::Stopped("the render worker's thread ended".into()));
+                    }
+                    break;
+                }
+            }
+        }
+        out
+    }
+
+    /// Whether the worker has stopped (as reported by [`Worker::poll`]).
+    pub fn stopped(&self) -> bool {
+        self.stopped
     }
 }
 
-fn run(mut session: Session, rx: Receiver<Msg>, tx: Sender<Reply>, wake: impl Fn()) {
-    let mut generation = 0;
+fn run(
+    mut session: Session,
+    mut generation: u64,
+    rx: Receiver<Msg>,
+    tx: Sender<Reply>,
+    wake: &impl Fn(),
+) {
     let mut pending: Vec<Msg> = Vec::new();
     loop {
         if pending.is_empty() {
@@ -176,6 +248,7 @@ fn run(mut session: Session, rx: Receiver<Msg>, tx: Sender<Reply>, wake: impl Fn
                 } => scene = Some((g, s, sent)),
                 Msg::Frame(j) => frame = Some(j),
                 Msg::Gpu(r) => session.set_gpu(*r),
+                Msg::Panic => panic!("fault injected by a test"),
             }
         }
         if let Some((g, s, sent)) = scene {
@@ -261,4 +334,71 @@ fn picture(frame: &fathom_core::frame::Frame, stats: Stats) -> Picture {
     let rgb = fathom_trace::post::to_rgb8(frame);
     let image = egui::ColorImage::from_rgb([frame.width as usize, frame.height as usize], &rgb);
     Picture { image, stats }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    fn job(id: u64, scene: &Scene) -> FrameJob {
+        FrameJob {
+            id,
+            stage: Stage::Full,
+            key: id,
+            camera: scene.camera.clone(),
+            request: RenderRequest {
+                width: 32,
+                height: 24,
+                threads: Some(1),
+                ..RenderRequest::default()
+            },
+            cancel: CancelToken::new(),
+            octree_step: false,
+            scale: 1.0,
+        }
+    }
+
+    /// Polls until a reply `want` accepts arrives (at most 60 s).
+    fn wait_for(w: &mut Worker, want: impl Fn(&Reply) -> bool) -> Reply {
+        let start = Instant::now();
+        loop {
+            if let Some(r) = w.poll().into_iter().find(|r| want(r)) {
+                return r;
+            }
+            assert!(start.elapsed() < Duration::from_secs(60), "no reply");
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    #[test]
+    fn a_panicking_worker_says_so_once_and_a_new_one_renders() {
+        let scene = fathom_core::presets::load("sierpinski").unwrap();
+        let mut w = Worker::start(scene.clone(), 7, || {}).unwrap();
+        w.render(job(1, &scene));
+        match wait_for(&mut w, |r| matches!(r, Reply::Frame(_))) {
+            Reply::Frame(f) => {
+                assert!(f.result.is_ok());
+                assert_eq!(f.generation, 7, "the starting generation is reported");
+            }
+            _ => unreachable!(),
+        }
+        w.inject_panic();
+        match wait_for(&mut w, |r| matches!(r, Reply::Stopped(_))) {
+            Reply::Stopped(why) => assert!(why.contains("fault injected"), "{why}"),
+            _ => unreachable!(),
+        }
+        assert!(w.stopped());
+        // Jobs sent now go nowhere, and the stop is not reported twice.
+        w.render(job(2, &scene));
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(w.poll().is_empty());
+        // A replacement renders.
+        let mut w = Worker::start(scene.clone(), 7, || {}).unwrap();
+        w.render(job(3, &scene));
+        assert!(matches!(
+            wait_for(&mut w, |r| matches!(r, Reply::Frame(_))),
+            Reply::Frame(f) if f.result.is_ok() && f.id == 3
+        ));
+    }
 }

@@ -27,6 +27,8 @@ pub enum RenderError {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Octree(#[from] OctreeError),
+    #[error(transparent)]
+    Volume(#[from] fathom_volume::VolumeError),
     /// The frame was abandoned through its [`crate::CancelToken`]; the session is unchanged.
     #[error("the render was cancelled")]
     Cancelled,

@@ -28,6 +28,7 @@ mod octree;
 pub mod request;
 pub mod session;
 pub mod stats;
+mod volume;
 pub mod zoom;
 
 pub use control::{CancelToken, Control, Progress};

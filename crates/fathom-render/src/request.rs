@@ -22,6 +22,9 @@ pub enum Backend {
     Gpu,
     /// The sparse voxel octree, subdivided until settled at the view.
     Octree,
+    /// The scene as a cloud: its interior sampled into a density grid and path-traced by
+    /// fathom-volume (settings in [`VolumeSettings`]).
+    Volume,
 }
 
 impl Backend {
@@ -31,6 +34,7 @@ impl Backend {
             Backend::Trace => "trace",
             Backend::Gpu => "gpu",
             Backend::Octree => "svo",
+            Backend::Volume => "volume",
         }
     }
 }
@@ -84,6 +88,49 @@ impl Default for OctreeSettings {
     }
 }
 
+/// Settings of the volume backend.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct VolumeSettings {
+    /// Density grid resolution per axis, [2, 512].
+    pub grid: u32,
+    /// Smooth the density over this many voxels across the surface, [0, 64].
+    pub smooth: f32,
+    /// Extinction per unit density and length, [0, 1e6].
+    pub density_scale: f32,
+    /// Single-scattering albedo, [0, 1].
+    pub albedo: f32,
+    /// Henyey-Greenstein asymmetry, (-1, 1).
+    pub g: f32,
+    /// Samples per pixel per frame at supersample 1 (times supersample^2), [1, 4096].
+    pub spp: u32,
+}
+
+impl Default for VolumeSettings {
+    fn default() -> Self {
+        VolumeSettings {
+            grid: 96,
+            smooth: 1.0,
+            density_scale: 20.0,
+            albedo: 0.8,
+            g: 0.0,
+            spp: 2,
+        }
+    }
+}
+
+impl Eq for VolumeSettings {}
+
+impl std::hash::Hash for VolumeSettings {
+    fn hash<H: std::hash::Hasher>(&self, h: &mut H) {
+        self.grid.hash(h);
+        self.spp.hash(h);
+        for f in [self.smooth, self.density_scale, self.albedo, self.g] {
+            f.to_bits().hash(h);
+        }
+    }
+}
+
 /// What to render: one frame, or one region of it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -113,6 +160,8 @@ pub struct RenderRequest {
     pub region: Option<Rect>,
     /// Octree settings (used by [`Backend::Octree`]).
     pub octree: OctreeSettings,
+    /// Volume settings (used by [`Backend::Volume`]).
+    pub volume: VolumeSettings,
 }
 
 impl Default for RenderRequest {
@@ -131,6 +180,7 @@ impl Default for RenderRequest {
             threads: None,
             region: None,
             octree: OctreeSettings::default(),
+            volume: VolumeSettings::default(),
         }
     }
 }
@@ -151,6 +201,16 @@ pub enum RequestError {
     OctreeStereo,
     #[error("the octree renderer does not render geometry-only frames")]
     OctreeGeometryOnly,
+    #[error(
+        "stereo and geometry-only frames are not supported by the volume renderer (it renders one mono view)"
+    )]
+    VolumeView,
+    #[error("volume {name} = {value} is out of range {range}")]
+    VolumeSetting {
+        name: &'static str,
+        value: f64,
+        range: &'static str,
+    },
     #[error("octree settle_frames = {0} is out of range [0, 100000]")]
     SettleFrames(usize),
     #[error(transparent)]
@@ -191,6 +251,50 @@ impl RenderRequest {
             && !(f.is_finite() && (0.0..=1e6).contains(&f))
         {
             return Err(RequestError::Fog(f));
+        }
+        if self.backend == Backend::Volume {
+            if self.projection != Projection::Mono || self.geometry_only {
+                return Err(RequestError::VolumeView);
+            }
+            let v = &self.volume;
+            let check = |name, value: f64, ok: bool, range| {
+                if ok && value.is_finite() {
+                    Ok(())
+                } else {
+                    Err(RequestError::VolumeSetting { name, value, range })
+                }
+            };
+            check(
+                "grid",
+                v.grid as f64,
+                (2..=512).contains(&v.grid),
+                "[2, 512]",
+            )?;
+            check(
+                "smooth",
+                v.smooth as f64,
+                (0.0..=64.0).contains(&v.smooth),
+                "[0, 64]",
+            )?;
+            check(
+                "density_scale",
+                v.density_scale as f64,
+                (0.0..=1e6).contains(&v.density_scale),
+                "[0, 1e6]",
+            )?;
+            check(
+                "albedo",
+                v.albedo as f64,
+                (0.0..=1.0).contains(&v.albedo),
+                "[0, 1]",
+            )?;
+            check("g", v.g as f64, v.g > -1.0 && v.g < 1.0, "(-1, 1)")?;
+            check(
+                "spp",
+                v.spp as f64,
+                (1..=4096).contains(&v.spp),
+                "[1, 4096]",
+            )?;
         }
         if self.backend == Backend::Octree {
             if self.projection != Projection::Mono {

@@ -53,6 +53,8 @@ pub struct Counters {
     pub gpu_uploads: u64,
     /// Octree explorers built (each scene or octree-setting change builds one).
     pub octrees_built: u64,
+    /// Density grids sampled for the volume backend (each scene or volume-setting change).
+    pub volumes_sampled: u64,
 }
 
 /// A finished frame and what it cost.
@@ -74,6 +76,7 @@ pub struct Session {
     pool: Option<(usize, rayon::ThreadPool)>,
     gpu: Option<GpuBackend>,
     octree: Option<OctreeBackend>,
+    volume: Option<crate::volume::VolumeBackend>,
 }
 
 impl Session {
@@ -93,6 +96,7 @@ impl Session {
             pool: None,
             gpu: None,
             octree: None,
+            volume: None,
         })
     }
 
@@ -216,6 +220,19 @@ impl Session {
                         );
                         r
                     }
+                    // A tape or an image this device cannot hold: the CPU tracer has no such
+                    // limits, so the frame is rendered there and the note says why.
+                    Err(
+                        e @ (fathom_gpu::GpuError::BufferTooLarge { .. }
+                        | fathom_gpu::GpuError::ImageTooLarge { .. }),
+                    ) => {
+                        let pool = pool(&mut self.pool, req.threads)?;
+                        let mut r = trace(&self.tape, &scene, camera, req, control, pool)?;
+                        r.stats.note = Some(format!(
+                            "this scene does not fit the GPU's limits ({e}); rendered on the CPU"
+                        ));
+                        r
+                    }
                     r => r?,
                 }
             }
@@ -224,6 +241,19 @@ impl Session {
                 let ob =
                     OctreeBackend::get(&mut self.octree, &scene, key, req, &mut self.counters)?;
                 ob.render(&scene, camera, req, control)?
+            }
+            Backend::Volume => {
+                let key = self.shading_generation;
+                let vb = crate::volume::VolumeBackend::get(
+                    &mut self.volume,
+                    &scene,
+                    &self.tape,
+                    key,
+                    req,
+                    &mut self.counters,
+                )?;
+                let pool = pool(&mut self.pool, req.threads)?;
+                vb.render(camera, req, control, pool)?
             }
         };
         out.stats.ms.total = start.elapsed().as_secs_f64() * 1e3;

@@ -280,6 +280,127 @@ fn the_gpu_falls_back_to_the_cpu_past_f32_precision_and_says_so() {
     assert!(r.stats.note.unwrap().contains("f32 precision"));
 }
 
+#[test]
+fn a_scene_too_large_for_the_device_falls_back_to_the_cpu_and_says_so() {
+    // A device whose storage buffers hold 64 KiB: 4096 tape instructions, and a G-buffer of
+    // about 1300 pixels.
+    const STORAGE: u64 = 64 << 10;
+    let gpu = fathom_gpu::Gpu::headless_vulkan_limited(|l| {
+        l.max_storage_buffer_binding_size = STORAGE;
+    })
+    .expect("lavapipe (scripts/setup.sh)");
+    // The image is too large for the G-buffer: rendered on the CPU, equal to the CPU's frame.
+    let scene = presets::load("menger").unwrap();
+    let cam = scene.camera.clone();
+    let mut s = Session::new(scene).unwrap();
+    s.set_gpu(fathom_gpu::Renderer::new(gpu).unwrap());
+    let req = RenderRequest {
+        backend: Backend::Gpu,
+        ..request(64, 48)
+    };
+    let r = s.render(&cam, &req).unwrap();
+    assert_eq!(r.stats.renderer, "trace");
+    let note = r.stats.note.unwrap();
+    assert!(
+        note.contains("does not fit") && note.contains("G-buffer"),
+        "{note}"
+    );
+    let cpu = s
+        .render(
+            &cam,
+            &RenderRequest {
+                backend: Backend::Trace,
+                ..req.clone()
+            },
+        )
+        .unwrap();
+    assert!(r.frame == cpu.frame);
+    // A small image of the same scene still renders on the GPU.
+    let r = s.render(&cam, &request_gpu(16, 12)).unwrap();
+    assert_eq!(r.stats.renderer, "gpu");
+    assert!(r.stats.note.is_none());
+
+    // A tape longer than the instruction buffer: every frame on the CPU, with the reason.
+    let mut root = fathom_core::scene::Node::new(fathom_core::primitives::Primitive::Sphere);
+    for i in 0..1000 {
+        root.children.push(
+            fathom_core::scene::Node::new(fathom_core::primitives::Primitive::Sphere)
+                .combine(fathom_core::combine::Combine::Union),
+        );
+        root.children[i].ops.push(fathom_core::scene::Call {
+            kind: fathom_core::scene::DomainOp::Transform(
+                fathom_core::transforms::Transform::Translate,
+            ),
+            params: vec![i as f64 * 0.01, 0.0, 0.0],
+        });
+    }
+    let mut big = fathom_core::scene::Scene::new(root);
+    big.camera.eye = glam::DVec3::new(0.0, 0.5, 4.0);
+    s.set_scene(big.clone()).unwrap();
+    let r = s.render(&big.camera, &request_gpu(16, 12)).unwrap();
+    assert_eq!(r.stats.renderer, "trace");
+    let note = r.stats.note.unwrap();
+    assert!(note.contains("the tape"), "{note}");
+}
+
+fn request_gpu(w: u32, h: u32) -> RenderRequest {
+    RenderRequest {
+        backend: Backend::Gpu,
+        ..request(w, h)
+    }
+}
+
+#[test]
+fn the_volume_backend_draws_the_scene_as_a_cloud_and_resamples_only_on_edits() {
+    let scene = presets::load("menger").unwrap();
+    let cam = scene.camera.clone();
+    let mut s = Session::new(scene.clone()).unwrap();
+    let mut req = RenderRequest {
+        backend: Backend::Volume,
+        ..request(24, 18)
+    };
+    req.volume.grid = 24;
+    req.volume.spp = 2;
+    let whole = s.render(&cam, &req).unwrap();
+    assert_eq!(whole.stats.renderer, "volume");
+    assert_eq!(s.counters().volumes_sampled, 1);
+    let f = &whole.frame;
+    let lum = |x: u32, y: u32| f.colour[(y * f.width + x) as usize].iter().sum::<f32>();
+    let (centre, corner) = (lum(12, 9), lum(0, 0));
+    assert!(
+        centre.is_finite() && corner > 0.0 && (centre - corner).abs() > 0.05 * corner,
+        "the cloud stands out from the sky: centre {centre}, corner {corner}"
+    );
+    // Deterministic per pixel and sample: regions are crops, and the grid is kept.
+    for r in grid(24, 18).into_iter().step_by(4) {
+        req.region = Some(r);
+        assert!(s.render(&cam, &req).unwrap().frame == f.crop(r), "{r:?}");
+    }
+    req.region = None;
+    assert_eq!(s.counters().volumes_sampled, 1);
+    // Supersampling is more samples per pixel: a different (less noisy) estimate.
+    req.supersample = 2;
+    let refined = s.render(&cam, &req).unwrap();
+    assert!(refined.frame != *f);
+    assert_eq!(s.counters().volumes_sampled, 1);
+    // A parameter edit changes the shape: the grid is sampled again.
+    let mut edited = scene.clone();
+    edited.root.shape.params[0] -= 1.0; // one iteration fewer
+    s.set_scene(edited).unwrap();
+    s.render(&cam, &req).unwrap();
+    assert_eq!(s.counters().volumes_sampled, 2);
+    // What the volume renderer refuses, by name.
+    req.projection = Projection::SideBySide {
+        eye_separation: 0.1,
+    };
+    let e = s.render(&cam, &req).unwrap_err().to_string();
+    assert!(e.contains("volume renderer"), "{e}");
+    req.projection = Projection::Mono;
+    req.volume.grid = 1;
+    let e = s.render(&cam, &req).unwrap_err().to_string();
+    assert!(e.contains("grid = 1") && e.contains("[2, 512]"), "{e}");
+}
+
 /// Steps the octree at a still camera for a fixed number of frames with a fixed number of
 /// subdivisions per frame (no time budget: the same tree on any machine), then compares the
 /// last frame with the sphere tracer's (shadows off: the octree bakes no shadows). Returns the

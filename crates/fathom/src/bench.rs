@@ -13,6 +13,13 @@ enum BenchKind {
     /// Tape evaluations per second per thread for each preset (f64 scalar, f32 packet), and
     /// tape compile time for a 100-node tree.
     Eval(crate::bench_eval::EvalArgs),
+    /// The explorer's render side at 1280x720: interactive frame time and the render scale it
+    /// settles at, time from the camera stopping to full resolution, parameter-edit latency;
+    /// on the CPU tracer and on the GPU renderer (lavapipe when there is no GPU).
+    Explore(crate::bench_explore::ExploreBenchArgs),
+    /// Render farm: an N-task local array against one process (overhead per task), and the
+    /// time to resume after a failure.
+    Farm(crate::bench_farm::FarmBenchArgs),
     /// GPU renderer vs CPU tracer per preset: ms per frame and evaluations per pixel.
     Gpu(crate::bench_gpu::GpuArgs),
     /// Live modulation: latency from an OSC packet to the frame that shows it, p99 frame time
@@ -36,6 +43,8 @@ enum BenchKind {
 pub fn run(a: BenchArgs) -> Result<(), String> {
     match a.kind {
         BenchKind::Eval(e) => crate::bench_eval::run(e),
+        BenchKind::Explore(e) => crate::bench_explore::run(e),
+        BenchKind::Farm(f) => crate::bench_farm::run(f),
         BenchKind::Gpu(g) => crate::bench_gpu::run(g),
         BenchKind::Live(l) => crate::bench_live::run(l),
         BenchKind::Micro(m) => crate::bench_micro::run(m),

@@ -328,7 +328,7 @@ fn path_render(a: &LiveBenchArgs) -> Result<serde_json::Value, String> {
     let args = RenderArgs {
         scene: Some(scene_file),
         output: PathBuf::from(format!("{}/", dir.join("frames").display())),
-        size: parse_size(&a.path_size)?,
+        size: Some(parse_size(&a.path_size)?),
         threads: a.path_threads,
         quiet: true,
         path: Some("dive".into()),

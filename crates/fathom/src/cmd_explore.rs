@@ -111,7 +111,25 @@ pub fn run(a: ExploreArgs) -> Result<(), String> {
                 .into(),
         );
     }
-    fathom_app::run(opts)
+    fathom_app::run(opts).map_err(|e| e.to_string())
+}
+
+/// `fathom` with no arguments: the explorer window on the default preset when a display is
+/// present and a window opens there; otherwise the default preset rendered to fathom.png, with
+/// the reason the window did not open.
+pub fn run_without_arguments() -> Result<(), String> {
+    if !fathom_app::display_available() {
+        return crate::cmd_render::run_default(Some(
+            "no display (DISPLAY and WAYLAND_DISPLAY are unset)",
+        ));
+    }
+    match fathom_app::run(crate::clap_defaults::<ExploreArgs>().options()?) {
+        Ok(()) => Ok(()),
+        Err(fathom_app::WindowError::Unavailable(why)) => {
+            crate::cmd_render::run_default(Some(&format!("no window could be opened: {why}")))
+        }
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 #[cfg(test)]

@@ -222,7 +222,7 @@ mod tests {
         RenderArgs {
             scene: Some(example()),
             output: PathBuf::from(format!("{}/", dir.display())),
-            size: (32, 24),
+            size: Some((32, 24)),
             threads: Some(1),
             quiet: true,
             path: Some(path.into()),

@@ -38,6 +38,9 @@ pub enum TracerKind {
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 -o dive/
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 \
 ///       -o shots/dive-####.exr --camera-path shots/dive.glb
+///   fathom render --preset menger --size 8192x8192 --tiles 64 --shard 3/64 -o poster/
+///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 --shard 0/8 -o dive/
+///   (farm shards: see `fathom farm --help`; then `fathom farm assemble poster/ -o poster.png`)
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct RenderArgs {
@@ -53,9 +56,10 @@ pub struct RenderArgs {
     /// Bits per channel of a PNG output: 8 or 16.
     #[arg(long, default_value_t = 8)]
     pub bit_depth: u8,
-    /// Image size WIDTHxHEIGHT, each side at most 16384 and at most 64 Mpixel in all.
-    #[arg(long, default_value = "1280x720", value_parser = parse_size)]
-    pub size: (u32, u32),
+    /// Image size WIDTHxHEIGHT, each side at most 16384 and at most 64 Mpixel in all
+    /// [default: 1280x720, or a Mandelbulber .fract file's own image size].
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
     /// Camera position x,y,z (overrides the scene).
     #[arg(long, value_parser = parse_vec, allow_hyphen_values = true)]
     pub eye: Option<DVec3>,
@@ -133,6 +137,16 @@ pub struct RenderArgs {
     /// glTF cannot animate it).
     #[arg(long, requires = "path")]
     pub camera_path: Option<PathBuf>,
+    /// Render farm: cut the still into N tiles, units of a farm job in the directory -o DIR
+    /// (with --shard, only that shard's tiles; else all, or the Slurm array task's share).
+    #[arg(long, value_name = "N", conflicts_with = "path")]
+    pub tiles: Option<usize>,
+    /// Render farm: render shard I of N of the job's units (tiles with --tiles, frames with
+    /// --path) into the job directory -o DIR; units already done are skipped. Without a
+    /// value: from SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT. Assemble the result with
+    /// `fathom farm assemble DIR`.
+    #[arg(long, value_name = "I/N", num_args = 0..=1, default_missing_value = "")]
+    pub shard: Option<String>,
 }
 
 /// Which renderer `fathom render` uses.
@@ -144,6 +158,9 @@ pub enum RendererKind {
     Gpu,
     /// The sparse voxel octree, subdivided until settled at the view.
     Svo,
+    /// The scene's interior as a cloud, path-traced (fathom-volume at its session defaults;
+    /// `fathom volume` has every setting). --supersample S renders 2 S^2 samples per pixel.
+    Volume,
 }
 
 /// Stereo layout.
@@ -156,7 +173,7 @@ pub enum StereoKind {
 }
 
 /// Loads the scene named by the arguments and applies the camera overrides.
-fn load_scene(a: &RenderArgs) -> Result<Scene, String> {
+pub(crate) fn load_scene(a: &RenderArgs) -> Result<Scene, String> {
     let mut scene = match (&a.scene, &a.preset) {
         (Some(path), _) => scene_file::load(path).map_err(|e| e.to_string())?,
         (None, Some(p)) => presets::load(p).map_err(|e| e.to_string())?,
@@ -218,16 +235,20 @@ impl RenderArgs {
             (true, RendererKind::Svo) => {
                 return Err("--gpu and --renderer svo choose two renderers; pick one".into());
             }
+            (true, RendererKind::Volume) => {
+                return Err("--gpu and --renderer volume choose two renderers; pick one".into());
+            }
             (true, _) | (false, RendererKind::Gpu) => Backend::Gpu,
             (false, RendererKind::Trace) => Backend::Trace,
             (false, RendererKind::Svo) => Backend::Octree,
+            (false, RendererKind::Volume) => Backend::Volume,
         })
     }
 
     /// The request these flags describe, checked.
     pub fn request(&self) -> Result<RenderRequest, String> {
         let backend = self.backend()?;
-        let (width, height) = self.size;
+        let (width, height) = self.size.unwrap_or(DEFAULT_SIZE);
         let req = RenderRequest {
             width,
             height,
@@ -273,7 +294,30 @@ fn progress_bar(quiet: bool) -> Result<indicatif::ProgressBar, String> {
     Ok(b)
 }
 
-pub fn run(a: RenderArgs) -> Result<(), String> {
+/// The image size of `fathom render` without --size.
+pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
+
+/// A Mandelbulber `.fract` scene renders at its own image size unless --size says otherwise
+/// (its camera's framing belongs to that aspect ratio).
+fn size_from_fract(a: &mut RenderArgs) -> Result<(), String> {
+    if a.size.is_some() {
+        return Ok(());
+    }
+    if let Some(path) = a.scene.as_deref().filter(|p| {
+        p.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("fract"))
+    }) {
+        let imported = fathom_core::scene_file::fract::load(path).map_err(|e| e.to_string())?;
+        a.size = Some(imported.image_size);
+    }
+    Ok(())
+}
+
+pub fn run(mut a: RenderArgs) -> Result<(), String> {
+    size_from_fract(&mut a)?;
+    if a.shard.is_some() || a.tiles.is_some() {
+        return crate::cmd_farm::render_shard(&a);
+    }
     if a.path.is_some() {
         let scene = load_scene(&a)?;
         return crate::cmd_flight::run(&a, scene);
@@ -343,11 +387,13 @@ pub fn run(a: RenderArgs) -> Result<(), String> {
 
 /// What `fathom` with no arguments does: render the default preset to ./fathom.png at
 /// 1280x720 and say where it went.
-pub fn run_default() -> Result<(), String> {
+/// `fathom` with no arguments and no window: renders the default preset to fathom.png and
+/// says so, with `why_no_window` (why the explorer window did not open).
+pub fn run_default(why_no_window: Option<&str>) -> Result<(), String> {
     let start = Instant::now();
     let a = RenderArgs {
         output: PathBuf::from("fathom.png"),
-        size: (1280, 720),
+        size: Some(DEFAULT_SIZE),
         quiet: true,
         ..RenderArgs::defaults()
     };
@@ -359,6 +405,9 @@ pub fn run_default() -> Result<(), String> {
         shown.display(),
         start.elapsed().as_secs_f64()
     );
+    if let Some(why) = why_no_window {
+        println!("the explorer window did not open ({why}); `fathom explore` opens it");
+    }
     Ok(())
 }
 
@@ -397,7 +446,7 @@ mod tests {
     fn args(output: &str, size: (u32, u32)) -> RenderArgs {
         RenderArgs {
             output: PathBuf::from(output),
-            size,
+            size: Some(size),
             threads: Some(1),
             quiet: true,
             ..RenderArgs::defaults()
@@ -480,6 +529,36 @@ mod tests {
             same,
             "the 16-bit image is the 8-bit one with more precision"
         );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_mandelbulber_file_renders_at_its_own_size_unless_told() {
+        let dir = std::env::temp_dir().join(format!("fathom-fract-size-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let fract = dir.join("b.fract");
+        std::fs::write(
+            &fract,
+            "# Mandelbulber settings file\n# version 2.20\n[main_parameters]\n\
+             camera 0 -3 0;\ntarget 0 0 0;\nimage_width 36;\nimage_height 20;\nN 8;\n\
+             formula_1 2;\n[fractal_1]\npower 8;\n",
+        )
+        .unwrap();
+        let mut a = args(dir.join("own.png").to_str().unwrap(), (1, 1));
+        a.scene = Some(fract.clone());
+        a.size = None;
+        run(a).unwrap();
+        let img = image::open(dir.join("own.png")).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (36, 20));
+        assert_ne!(
+            img.get_pixel(18, 10),
+            img.get_pixel(0, 0),
+            "the bulb is in the middle"
+        );
+        let mut a = args(dir.join("told.png").to_str().unwrap(), (24, 16));
+        a.scene = Some(fract);
+        run(a).unwrap();
+        assert_eq!(image::open(dir.join("told.png")).unwrap().width(), 24);
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -50,6 +50,7 @@ impl From<TraversalArg> for Traversal {
 ///   fathom zoom --preset menger --traversal kdrestart --stats kd.json   (the baseline)
 ///   fathom zoom --preset menger-tour --frames 900 --size 1280x720 -o tour/
 ///   ffmpeg -framerate 30 -i frames/frame_%05d.png zoom.mp4              (frames to a video)
+///   fathom zoom --preset menger --depth 1e6 --frames 240 --shard 2/8 -o zoom/   (a farm shard)
 #[derive(Args, Clone)]
 #[command(verbatim_doc_comment)]
 pub struct ZoomArgs {
@@ -110,6 +111,12 @@ pub struct ZoomArgs {
     /// in the zoom's frame times, but it slows the run).
     #[arg(long, default_value_t = 0)]
     pub compare_every: usize,
+    /// Render farm: render shard I of N of the zoom's frames into the job directory -o DIR,
+    /// each frame a settled still on a fresh octree (so it does not depend on the frames
+    /// before it; slower than the stepped zoom, and not the same images). Without a value:
+    /// from SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT. Path presets only.
+    #[arg(long, value_name = "I/N", num_args = 0..=1, default_missing_value = "")]
+    pub shard: Option<String>,
 }
 
 /// Parses `X,Y` (two whole numbers).
@@ -229,6 +236,9 @@ pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
 }
 
 pub fn run(a: ZoomArgs) -> Result<(), String> {
+    if a.shard.is_some() {
+        return crate::cmd_farm::zoom_shard(&a);
+    }
     let report = run_zoom(&a, false)?;
     let s = &report.summary;
     println!(

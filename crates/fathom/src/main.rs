@@ -12,6 +12,8 @@ use std::process::ExitCode;
 mod args;
 mod bench;
 mod bench_eval;
+mod bench_explore;
+mod bench_farm;
 mod bench_gpu;
 mod bench_live;
 mod bench_mesh;
@@ -20,6 +22,7 @@ mod bench_svo;
 mod bench_trace;
 mod bench_volume;
 mod cmd_explore;
+mod cmd_farm;
 mod cmd_flight;
 mod cmd_import;
 mod cmd_list;
@@ -68,6 +71,7 @@ enum Command {
     Volume(Box<cmd_volume::VolumeArgs>),
     OscSend(cmd_osc::OscSendArgs),
     OscMonitor(cmd_osc::OscMonitorArgs),
+    Farm(cmd_farm::FarmArgs),
 }
 
 /// The arguments of a command given no flags, from its clap declarations (every flag has a
@@ -84,8 +88,7 @@ pub fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        None if fathom_app::display_available() => cmd_explore::run(crate::clap_defaults()),
-        None => cmd_render::run_default(),
+        None => cmd_explore::run_without_arguments(),
         Some(Command::Render(a)) => cmd_render::run(*a),
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
@@ -98,6 +101,7 @@ fn main() -> ExitCode {
         Some(Command::Volume(a)) => cmd_volume::run(*a),
         Some(Command::OscSend(a)) => cmd_osc::send(a),
         Some(Command::OscMonitor(a)) => cmd_osc::monitor(a),
+        Some(Command::Farm(a)) => cmd_farm::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -129,6 +133,7 @@ mod tests {
             "import",
             "osc-send",
             "osc-monitor",
+            "farm",
         ] {
             let sub = cli.find_subcommand_mut(name).unwrap();
             let help = sub.render_long_help().to_string();

@@ -1,0 +1,150 @@
+//! Files that never lie: every output is written to a temporary name in the same directory
+//! and renamed over its final name only once complete, so a killed task, a full disk or a
+//! failed encoder leaves no partial file under a final name (the temporary one is removed
+//! when the failure is seen; a killed task's is ignored and overwritten by a rerun).
+
+use crate::error::FarmError;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// The temporary name `path` is written under (hidden, unique per process and call).
+pub fn temp_path(path: &Path) -> PathBuf {
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    path.with_file_name(format!(".{name}.tmp-{}-{n}", std::process::id()))
+}
+
+/// Whether a file name is one of [`temp_path`]'s.
+pub fn is_temp_name(name: &str) -> bool {
+    name.starts_with('.') && name.contains(".tmp-")
+}
+
+/// Writes `bytes` to `path` through a temporary file, synced, then renamed.
+pub fn write(path: &Path, bytes: &[u8]) -> Result<(), FarmError> {
+    write_with(path, |tmp| {
+        let mut f = std::fs::File::create_new(tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()
+    })
+}
+
+/// [`write`] with the temporary file written by `fill` (which creates it): on an error the
+/// temporary file is removed and nothing appears under `path`.
+pub fn write_with(
+    path: &Path,
+    fill: impl FnOnce(&Path) -> std::io::Result<()>,
+) -> Result<(), FarmError> {
+    let tmp = temp_path(path);
+    let result = fill(&tmp).and_then(|()| std::fs::rename(&tmp, path));
+    result.map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        FarmError::Write {
+            path: path.into(),
+            source,
+        }
+    })
+}
+
+/// Writes `bytes` to `path` only if nothing is there: through a temporary file and a hard
+/// link, which fails if the name exists (one creator wins a race, and the name never shows
+/// a partial file). Returns whether this call created it.
+pub fn create_exclusive(path: &Path, bytes: &[u8]) -> Result<bool, FarmError> {
+    let tmp = temp_path(path);
+    let werr = |source| FarmError::Write {
+        path: path.into(),
+        source,
+    };
+    let filled = (|| {
+        let mut f = std::fs::File::create_new(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()
+    })();
+    if let Err(e) = filled {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(werr(e));
+    }
+    let linked = std::fs::hard_link(&tmp, path);
+    let _ = std::fs::remove_file(&tmp);
+    match linked {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(false),
+        Err(e) => Err(werr(e)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A writer onto a "disk" that fills up after `room` bytes.
+    struct SmallDisk {
+        file: std::fs::File,
+        room: usize,
+    }
+
+    impl Write for SmallDisk {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if self.room == 0 {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::StorageFull,
+                    "No space left on device",
+                ));
+            }
+            let n = buf.len().min(self.room);
+            self.room -= n;
+            self.file.write(&buf[..n])
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            self.file.flush()
+        }
+    }
+
+    pub(crate) fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("fathom-farm-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn a_full_disk_leaves_no_file_under_the_final_name_nor_a_temporary_one() {
+        let dir = scratch("atomic");
+        let path = dir.join("tile-00000.png");
+        let bytes = vec![7u8; 10_000];
+        let e = write_with(&path, |tmp| {
+            let mut w = SmallDisk {
+                file: std::fs::File::create_new(tmp)?,
+                room: 4096,
+            };
+            w.write_all(&bytes)
+        })
+        .unwrap_err();
+        assert!(matches!(e, FarmError::Write { .. }), "{e}");
+        assert!(e.to_string().contains("No space left"), "{e}");
+        assert!(!path.exists());
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "temporary left"
+        );
+        // A good write lands whole, and replaces an older file.
+        write(&path, b"old").unwrap();
+        write(&path, &bytes).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), bytes);
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        // Exclusive creation: the first wins, the second changes nothing.
+        let m = dir.join("farm.json");
+        assert!(create_exclusive(&m, b"job A").unwrap());
+        assert!(!create_exclusive(&m, b"job B").unwrap());
+        assert_eq!(std::fs::read(&m).unwrap(), b"job A");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            2,
+            "temporary left"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -1,0 +1,92 @@
+//! [`FarmError`]: everything a farm job can refuse or fail at, each with what to do about it.
+
+use std::path::PathBuf;
+
+/// Why a farm job, shard or assembly was refused or failed.
+#[derive(Debug, thiserror::Error)]
+pub enum FarmError {
+    /// `--shard` text that is not `I/N`.
+    #[error("shard `{0}` should look like I/N with 0 <= I < N (e.g. 3/8)")]
+    ShardSyntax(String),
+    /// A shard index past the shard count.
+    #[error("shard {index}/{count} is out of range: the index must be in 0..{count}")]
+    ShardOutOfRange { index: usize, count: usize },
+    /// A shard count of zero or above the limit.
+    #[error("shard count {0} is out of range 1..={max}", max = crate::shard::MAX_SHARDS)]
+    ShardCount(usize),
+    /// A scheduler variable that is set but unusable.
+    #[error("environment variable {name}={value:?} is not usable: {why}")]
+    Env {
+        name: &'static str,
+        value: String,
+        why: String,
+    },
+    /// A tile count, frame count or zoom depth out of range.
+    #[error("{0}")]
+    Work(String),
+    /// The request cannot be split (a region already set, a bad size...).
+    #[error("the render request cannot be farmed: {0}")]
+    Request(String),
+    /// DIR holds the outputs of another job.
+    #[error(
+        "{} holds the outputs of a different job ({what} differs: existing job {existing}, this job {new}); \
+         use a new directory, or delete it to start over",
+        dir.display()
+    )]
+    DifferentJob {
+        dir: PathBuf,
+        what: String,
+        existing: String,
+        new: String,
+    },
+    /// DIR has no manifest.
+    #[error(
+        "{} is not a farm directory (no {}); create the job with `fathom farm slurm` or a `--shard` render",
+        dir.display(),
+        crate::manifest::MANIFEST
+    )]
+    NotAFarm { dir: PathBuf },
+    /// A manifest, receipt or scene file that does not parse.
+    #[error("{} is damaged: {why}", path.display())]
+    Damaged { path: PathBuf, why: String },
+    /// The stored scene does not match the manifest's hash.
+    #[error("{} does not match the scene hash in the manifest (edited by hand?)", path.display())]
+    SceneChanged { path: PathBuf },
+    /// Reading a file failed.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// Writing a file failed (disk full, no permission...); no partial file is left under
+    /// its final name.
+    #[error("cannot write {}: {source} (nothing was left under that name)", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// Units that are missing or do not match their receipts (assembly refuses them).
+    #[error("{} of {total} units are not done ({}); rerun the shards (they render only what is missing)", bad.len(), summary(bad))]
+    Incomplete { total: usize, bad: Vec<String> },
+    /// Rendering a unit failed.
+    #[error("unit {unit} ({file}): {message}")]
+    Render {
+        unit: usize,
+        file: String,
+        message: String,
+    },
+    /// Decoding or encoding an image failed.
+    #[error("{}: {message}", path.display())]
+    Image { path: PathBuf, message: String },
+    /// The scheduler's command failed.
+    #[error("{command}: {message}")]
+    Scheduler { command: String, message: String },
+}
+
+fn summary(bad: &[String]) -> String {
+    let mut s = bad.iter().take(4).cloned().collect::<Vec<_>>().join(", ");
+    if bad.len() > 4 {
+        s.push_str(&format!(", and {} more", bad.len() - 4));
+    }
+    s
+}

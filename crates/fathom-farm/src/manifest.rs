@@ -1,0 +1,372 @@
+//! The job directory and its manifest. `DIR/farm.json` holds the job's fingerprint (hash of
+//! the scene text, the render request, the work, the fathom version), its id (a hash of the
+//! fingerprint) and the list of units with their file names; `DIR/scene.ron` the scene text.
+//! Each finished unit gets a receipt `DIR/receipts/FILE.json` (job id, file, size, SHA-256)
+//! written after its file: tasks never write the same file, so no lock is needed. A unit is
+//! done when its receipt names this job and its file has the receipt's size and checksum;
+//! missing when its file does not exist; corrupt otherwise (rendered again by a rerun).
+
+use crate::atomic;
+use crate::error::FarmError;
+use crate::work::{Unit, Work};
+use fathom_render::RenderRequest;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::path::{Path, PathBuf};
+
+/// The manifest's file name.
+pub const MANIFEST: &str = "farm.json";
+/// The stored scene's file name.
+pub const SCENE: &str = "scene.ron";
+/// The receipts' directory.
+pub const RECEIPTS: &str = "receipts";
+/// Manifest format version.
+pub const FORMAT: u32 = 1;
+
+/// SHA-256 of `bytes`, as lowercase hex.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// Everything the outputs depend on. Two jobs with the same fingerprint make the same bytes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fingerprint {
+    pub fathom_version: String,
+    /// SHA-256 of the scene text (`scene.ron`).
+    pub scene_sha256: String,
+    /// The request, without threads (any count renders the same pixels) and region.
+    pub request: RenderRequest,
+    pub work: Work,
+}
+
+impl Fingerprint {
+    /// The fingerprint of rendering `work` of the scene `scene_text` with `request`.
+    pub fn new(scene_text: &str, request: &RenderRequest, work: Work) -> Result<Self, FarmError> {
+        if request.region.is_some() {
+            return Err(FarmError::Request(
+                "it already has a region; the farm cuts the image itself".into(),
+            ));
+        }
+        request
+            .validate()
+            .map_err(|e| FarmError::Request(e.to_string()))?;
+        work.validate(request.output_size())?;
+        Ok(Fingerprint {
+            fathom_version: env!("CARGO_PKG_VERSION").into(),
+            scene_sha256: sha256_hex(scene_text.as_bytes()),
+            request: RenderRequest {
+                threads: None,
+                ..request.clone()
+            },
+            work,
+        })
+    }
+
+    /// The job id: the first 16 hex digits of the SHA-256 of the fingerprint's JSON.
+    pub fn id(&self) -> String {
+        let json = serde_json::to_string(self).expect("a fingerprint serialises");
+        sha256_hex(json.as_bytes())[..16].into()
+    }
+}
+
+/// `DIR/farm.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    pub format: u32,
+    pub job: String,
+    pub fingerprint: Fingerprint,
+    /// Size of the output image (both eyes for stereo).
+    pub output: (u32, u32),
+    pub units: Vec<Unit>,
+}
+
+/// `DIR/receipts/FILE.json`: a unit's file as it was written.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Receipt {
+    pub job: String,
+    pub unit: usize,
+    pub file: String,
+    pub size: u64,
+    pub sha256: String,
+}
+
+/// A unit's state on disk.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum UnitState {
+    Done(Receipt),
+    Missing,
+    /// Present but not trustworthy (why).
+    Corrupt(String),
+}
+
+/// What `farm status` reports.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Status {
+    pub job: String,
+    pub units: usize,
+    pub done: Vec<usize>,
+    pub missing: Vec<usize>,
+    /// Unit and why.
+    pub corrupt: Vec<(usize, String)>,
+}
+
+impl Status {
+    pub fn complete(&self) -> bool {
+        self.done.len() == self.units
+    }
+}
+
+/// An open job directory.
+#[derive(Clone, Debug)]
+pub struct FarmDir {
+    pub dir: PathBuf,
+    pub manifest: Manifest,
+}
+
+fn read(path: &Path) -> Result<Vec<u8>, FarmError> {
+    std::fs::read(path).map_err(|source| FarmError::Read {
+        path: path.into(),
+        source,
+    })
+}
+
+fn damaged(path: &Path, why: impl ToString) -> FarmError {
+    FarmError::Damaged {
+        path: path.into(),
+        why: why.to_string(),
+    }
+}
+
+impl FarmDir {
+    /// Opens `dir` for the job `fingerprint` of `scene_text`, creating it (with its manifest
+    /// and scene) when new. A directory holding another job is refused, naming what differs.
+    pub fn create(
+        dir: &Path,
+        fingerprint: Fingerprint,
+        scene_text: &str,
+    ) -> Result<FarmDir, FarmError> {
+        let job = fingerprint.id();
+        if dir.join(MANIFEST).exists() {
+            let existing = FarmDir::open(dir)?;
+            if existing.manifest.job != job {
+                let old = &existing.manifest.fingerprint;
+                let new = &fingerprint;
+                let what = if old.fathom_version != new.fathom_version {
+                    format!(
+                        "fathom version ({} then, {} now)",
+                        old.fathom_version, new.fathom_version
+                    )
+                } else if old.scene_sha256 != new.scene_sha256 {
+                    "the scene".into()
+                } else if old.work != new.work {
+                    "the work (tiles or frames)".into()
+                } else {
+                    "the render request".into()
+                };
+                return Err(FarmError::DifferentJob {
+                    dir: dir.into(),
+                    what,
+                    existing: existing.manifest.job,
+                    new: job,
+                });
+            }
+            return Ok(existing);
+        }
+        let output = fingerprint.request.output_size();
+        let manifest = Manifest {
+            format: FORMAT,
+            job,
+            units: fingerprint.work.units(output),
+            output,
+            fingerprint,
+        };
+        std::fs::create_dir_all(dir.join(RECEIPTS)).map_err(|source| FarmError::Write {
+            path: dir.join(RECEIPTS),
+            source,
+        })?;
+        // The scene first (a manifest never exists without its scene), each created only if
+        // absent: of two jobs racing into a new directory, one wins each name and the other
+        // is refused, never mixed in; tasks of one job write identical bytes.
+        if !atomic::create_exclusive(&dir.join(SCENE), scene_text.as_bytes())?
+            && std::fs::read(dir.join(SCENE)).ok().as_deref() != Some(scene_text.as_bytes())
+            && !dir.join(MANIFEST).exists()
+        {
+            return Err(FarmError::DifferentJob {
+                dir: dir.into(),
+                what: "the scene".into(),
+                existing: "(being created, or left by an interrupted creation)".into(),
+                new: manifest.job,
+            });
+        }
+        let json = serde_json::to_vec_pretty(&manifest).expect("a manifest serialises");
+        if !atomic::create_exclusive(&dir.join(MANIFEST), &json)? {
+            // Another task created it meanwhile: same job, or refused.
+            return FarmDir::create(dir, manifest.fingerprint, scene_text);
+        }
+        Ok(FarmDir {
+            dir: dir.into(),
+            manifest,
+        })
+    }
+
+    /// Opens an existing job directory.
+    pub fn open(dir: &Path) -> Result<FarmDir, FarmError> {
+        let path = dir.join(MANIFEST);
+        if !path.exists() {
+            return Err(FarmError::NotAFarm { dir: dir.into() });
+        }
+        let manifest: Manifest =
+            serde_json::from_slice(&read(&path)?).map_err(|e| damaged(&path, e))?;
+        if manifest.format != FORMAT {
+            return Err(damaged(
+                &path,
+                format!("format {} (this fathom reads {FORMAT})", manifest.format),
+            ));
+        }
+        if manifest.job != manifest.fingerprint.id() {
+            return Err(damaged(&path, "its job id does not match its fingerprint"));
+        }
+        if manifest.units != manifest.fingerprint.work.units(manifest.output) {
+            return Err(damaged(&path, "its units do not match its work"));
+        }
+        Ok(FarmDir {
+            dir: dir.into(),
+            manifest,
+        })
+    }
+
+    /// The stored scene text, checked against the manifest's hash.
+    pub fn scene_text(&self) -> Result<String, FarmError> {
+        let path = self.dir.join(SCENE);
+        let bytes = read(&path)?;
+        if sha256_hex(&bytes) != self.manifest.fingerprint.scene_sha256 {
+            return Err(FarmError::SceneChanged { path });
+        }
+        String::from_utf8(bytes).map_err(|e| damaged(&path, e))
+    }
+
+    /// The path of a unit's file.
+    pub fn path(&self, unit: &Unit) -> PathBuf {
+        self.dir.join(&unit.file)
+    }
+
+    fn receipt_path(&self, unit: &Unit) -> PathBuf {
+        self.dir.join(RECEIPTS).join(format!("{}.json", unit.file))
+    }
+
+    /// Unit `unit`'s state: its receipt and its file checked (size, then SHA-256).
+    pub fn check(&self, unit: &Unit) -> UnitState {
+        let file = self.path(unit);
+        let rpath = self.receipt_path(unit);
+        let bytes = match std::fs::read(&file) {
+            Ok(b) => Some(b),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(e) => return UnitState::Corrupt(format!("cannot read: {e}")),
+        };
+        let receipt = match std::fs::read(&rpath) {
+            Ok(r) => match serde_json::from_slice::<Receipt>(&r) {
+                Ok(r) => Some(r),
+                Err(e) => return UnitState::Corrupt(format!("damaged receipt: {e}")),
+            },
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(e) => return UnitState::Corrupt(format!("cannot read receipt: {e}")),
+        };
+        match (bytes, receipt) {
+            // A receipt whose file is gone: the unit is missing (the receipt is replaced).
+            (None, _) => UnitState::Missing,
+            (Some(_), None) => UnitState::Corrupt("no receipt (interrupted write?)".into()),
+            (Some(b), Some(r)) => {
+                if r.job != self.manifest.job || r.unit != unit.index || r.file != unit.file {
+                    UnitState::Corrupt(format!("receipt of another job or unit ({})", r.job))
+                } else if b.len() as u64 != r.size {
+                    UnitState::Corrupt(format!("{} bytes, the receipt says {}", b.len(), r.size))
+                } else if sha256_hex(&b) != r.sha256 {
+                    UnitState::Corrupt("checksum does not match the receipt".into())
+                } else {
+                    UnitState::Done(r)
+                }
+            }
+        }
+    }
+
+    /// Every unit's state.
+    pub fn status(&self) -> Status {
+        let mut s = Status {
+            job: self.manifest.job.clone(),
+            units: self.manifest.units.len(),
+            ..Status::default()
+        };
+        for u in &self.manifest.units {
+            match self.check(u) {
+                UnitState::Done(_) => s.done.push(u.index),
+                UnitState::Missing => s.missing.push(u.index),
+                UnitState::Corrupt(why) => s.corrupt.push((u.index, why)),
+            }
+        }
+        s
+    }
+
+    /// Stores a finished unit: its file (through a temporary name), then its receipt; when the
+    /// receipt cannot be written the file is removed again.
+    pub fn commit(&self, unit: &Unit, bytes: &[u8]) -> Result<Receipt, FarmError> {
+        let receipt = Receipt {
+            job: self.manifest.job.clone(),
+            unit: unit.index,
+            file: unit.file.clone(),
+            size: bytes.len() as u64,
+            sha256: sha256_hex(bytes),
+        };
+        // An old receipt goes first: between the two writes the unit reads as corrupt, never
+        // as done with the wrong bytes.
+        let rpath = self.receipt_path(unit);
+        match std::fs::remove_file(&rpath) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(source) => {
+                return Err(FarmError::Write {
+                    path: rpath,
+                    source,
+                });
+            }
+        }
+        let file = self.path(unit);
+        atomic::write(&file, bytes)?;
+        let json = serde_json::to_vec_pretty(&receipt).expect("a receipt serialises");
+        if let Err(e) = atomic::write(&rpath, &json) {
+            // No receipt, no file: a final name is only ever seen with its receipt (but for
+            // a task killed between the two renames, which reads as corrupt and is redone).
+            let _ = std::fs::remove_file(&file);
+            return Err(e);
+        }
+        Ok(receipt)
+    }
+
+    /// Verifies every unit; the units' files in order when all are done.
+    pub fn verified(&self) -> Result<Vec<PathBuf>, FarmError> {
+        let s = self.status();
+        if !s.complete() {
+            let units = &self.manifest.units;
+            let mut bad: Vec<String> = s
+                .missing
+                .iter()
+                .map(|&i| format!("{} missing", units[i].file))
+                .collect();
+            bad.extend(
+                s.corrupt
+                    .iter()
+                    .map(|(i, why)| format!("{} corrupt: {why}", units[*i].file)),
+            );
+            return Err(FarmError::Incomplete {
+                total: s.units,
+                bad,
+            });
+        }
+        Ok(self.manifest.units.iter().map(|u| self.path(u)).collect())
+    }
+}
