@@ -441,6 +441,20 @@ mod tests {
     }
 
     #[test]
+    fn farm_shards_refuse_aims_and_scene_presets_they_cannot_rebuild() {
+        let mut a = args();
+        a.shard = Some("0/1".into());
+        a.output = Some(std::env::temp_dir().join("fathom-zoom-shard-refusal"));
+        a.pixel = Some((1, 1));
+        let e = crate::cmd_farm::zoom_shard(&a).unwrap_err();
+        assert!(e.contains("--shard renders the path presets"), "{e}");
+        a.pixel = None;
+        a.preset = Some("sierpinski".into());
+        let e = crate::cmd_farm::zoom_shard(&a).unwrap_err();
+        assert!(e.contains("sierpinski"), "{e}");
+    }
+
+    #[test]
     fn a_zoom_into_any_scene_stops_at_the_precision_limit_too() {
         let mut a = args();
         a.preset = Some("sierpinski".into());
