@@ -10,6 +10,7 @@
 //! - [`control`]: cancellation ([`CancelToken`], checked between tiles) and progress;
 //! - [`stats`]: [`Stats`], one statistics type serialised with the same keys for every backend;
 //! - [`zoom`]: the octree's zoom loop with its precision guard;
+//! - [`compare`]: an octree frame against the sphere tracer's (SSIM, silhouette IoU, colour);
 //! - [`flight`]: a scene's flight path rendered frame by frame (`fathom render --path`);
 //! - `gpu`, `octree`: the two backends with state of their own.
 //!
@@ -18,6 +19,7 @@
 //! included); the GPU and octree backends render the whole frame and crop it (the same
 //! pixels, no time saved).
 
+pub mod compare;
 pub mod control;
 pub mod error;
 pub mod flight;

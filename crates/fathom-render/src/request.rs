@@ -60,8 +60,11 @@ pub struct OctreeSettings {
     pub max_memory: usize,
     /// Traversal of the octree.
     pub traversal: Traversal,
-    /// The scene's exact bounding cube as the root (else a cube fitted inside [-4, 4]^3).
+    /// The scene's exact bounding cube as the root (else a cube fitted to the surface inside
+    /// [-fit_half, fit_half]^3).
     pub root: Option<ExactCube>,
+    /// Half side of the cube the root is fitted inside when `root` is not given (> 0).
+    pub fit_half: f64,
     /// Most frames spent subdividing at a still view before rendering it.
     pub settle_frames: usize,
     /// Subdivision time per frame in ms, for stepped frames (zooms and the window).
@@ -77,6 +80,7 @@ impl Default for OctreeSettings {
             max_memory: 1 << 30,
             traversal: Traversal::Neighbour,
             root: None,
+            fit_half: 4.0,
             settle_frames: 400,
             subdivide_ms: 12.0,
             unify_every: 4,
@@ -324,7 +328,7 @@ impl RenderRequest {
             unify_every: o.unify_every,
             root: match o.root {
                 Some(c) => RootSpec::from_cube(Some(c)),
-                None => RootSpec::Fit { half: 4.0 },
+                None => RootSpec::Fit { half: o.fit_half },
             },
             ..ExplorerConfig::default()
         }

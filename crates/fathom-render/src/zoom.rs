@@ -1,15 +1,23 @@
 //! A zoom (or tour) with the octree: the frame loop of `fathom zoom` and `fathom bench svo`.
 //! Each frame takes its camera from the path, checks the precision guard (a zoom stops
 //! cleanly where f64 root coordinates run out, and says so), steps the session's octree, and
-//! hands the finished frame (when frames are wanted) and its statistics to the caller.
+//! hands the finished frame (when frames are wanted) and its statistics to the caller. Every
+//! `compare_every`-th frame is also rendered by the sphere tracer at the same camera and the
+//! two compared ([`crate::compare`]): SSIM on luminance, silhouette IoU, colour error, and the
+//! largest visible voxel in pixels, with the frame's camera.
 
+use crate::compare::{Agreement, Reference, agreement};
 use crate::error::RenderError;
 use crate::request::{Backend, RenderRequest};
 use crate::session::Session;
-use fathom_core::camera_path::PathPreset;
+use fathom_core::Camera;
+use fathom_core::Scene;
+use fathom_core::Tape;
+use fathom_core::camera_path::{CameraPath, ExactCube, PathPreset, surface_point, view_target};
 use fathom_core::frame::Frame;
 use fathom_svo::stats::Summary;
 use fathom_svo::{FrameStats, Traversal};
+use glam::DVec3;
 use serde::Serialize;
 
 /// A zoom to run.
@@ -22,6 +30,26 @@ pub struct Zoom {
     /// Size, SSAO, threads and octree settings (the backend is the octree; the root cube
     /// comes from the path preset when it has one).
     pub request: RenderRequest,
+    /// Compare every this many frames with the sphere tracer (and the last frame); 0: never.
+    pub compare_every: usize,
+}
+
+/// One frame of a zoom compared with the sphere tracer at the same camera.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameComparison {
+    /// Frame number from 0.
+    pub frame: usize,
+    /// Zoom factor of the frame.
+    pub zoom: f64,
+    /// The frame's camera.
+    pub camera: Camera,
+    /// The largest visible voxel, in pixels.
+    pub largest_voxel_px: f64,
+    /// SSIM, silhouette IoU and colour agreement with the tracer's frame.
+    #[serde(flatten)]
+    pub agreement: Agreement,
+    /// Milliseconds the tracer took (not part of the zoom's frame times).
+    pub trace_ms: f64,
 }
 
 /// Why a zoom was refused.
@@ -33,9 +61,242 @@ pub enum ZoomError {
     Frames(usize),
     #[error(transparent)]
     Render(#[from] RenderError),
+    /// `--pixel` names a pixel outside the image.
+    #[error(
+        "--pixel {x},{y} is outside the {width}x{height} image (x in 0..{width}, y in 0..{height})"
+    )]
+    PixelOutside {
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+    },
+    /// `--toward` names the eye itself, or a point that is not finite.
+    #[error(
+        "--toward {x},{y},{z} gives no direction from the eye at {eye_x},{eye_y},{eye_z} (the point must differ from the eye and be finite)"
+    )]
+    TowardEye {
+        x: f64,
+        y: f64,
+        z: f64,
+        eye_x: f64,
+        eye_y: f64,
+        eye_z: f64,
+    },
+    /// The eye of the view is inside the surface, so no ray reaches it from outside.
+    #[error("the eye at {x},{y},{z} is inside the surface of {scene}; move the camera out first")]
+    EyeInside {
+        scene: String,
+        x: f64,
+        y: f64,
+        z: f64,
+    },
+    /// The aimed ray never reaches the surface.
+    #[error(
+        "nothing to zoom into: {what} misses the surface of {scene}; aim at a pixel that shows the surface (--pixel X,Y) or toward a point on it (--toward x,y,z)"
+    )]
+    Miss { scene: String, what: String },
+    /// The octree's root cube does not contain the zoom target: the zoom would end on sky.
+    #[error(
+        "the zoom target {x},{y},{z} lies outside the octree's root cube (corner {min_x},{min_y},{min_z}, side {side}); the octree fits its root to the surface inside a cube around the origin 1.5 times the target's largest coordinate (at least [-4, 4]^3), so the surface there was not found"
+    )]
+    OutsideRoot {
+        x: f64,
+        y: f64,
+        z: f64,
+        min_x: f64,
+        min_y: f64,
+        min_z: f64,
+        side: f64,
+    },
+    /// The scene does not compile.
+    #[error("the scene {scene} does not compile: {message}")]
+    Compile { scene: String, message: String },
     /// The frame callback failed (writing a frame, say).
     #[error("{0}")]
     Output(String),
+}
+
+/// What a zoom flies: a scene, a camera path over it and, when the scene has one, its exact
+/// bounding cube (the octree's root). A path preset ([`PathPreset`]) or any scene with an aim
+/// ([`ZoomPath::aim`]).
+#[derive(Clone, Debug)]
+pub struct ZoomPath {
+    /// Name for reports (preset name or scene file).
+    pub name: String,
+    /// The scene.
+    pub scene: Scene,
+    /// Vertical field of view, degrees.
+    pub fov: f64,
+    /// The camera path.
+    pub path: CameraPath,
+    /// The scene's exact bounding cube, if known.
+    pub cube: Option<ExactCube>,
+}
+
+impl From<PathPreset> for ZoomPath {
+    fn from(p: PathPreset) -> ZoomPath {
+        ZoomPath {
+            name: p.name.into(),
+            scene: p.scene,
+            fov: p.fov,
+            path: p.path,
+            cube: p.cube,
+        }
+    }
+}
+
+/// Where a zoom into a scene goes: the surface point hit by a ray from the view's eye.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Aim {
+    /// The centre ray of the view, or the first ray that hits on a spiral around it.
+    View,
+    /// The ray from the eye through this world point.
+    Toward(DVec3),
+    /// The ray through the centre of this pixel of a `width` x `height` image of the view.
+    Pixel {
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+    },
+}
+
+impl ZoomPath {
+    /// A zoom from `view`'s eye into the surface of `scene` where `aim`'s ray first reaches it
+    /// (bracketed to f64 precision, the outside point: [`surface_point`]); the camera then
+    /// looks at that point from along the ray, so an aimed pixel moves to the image centre.
+    pub fn aim(
+        name: &str,
+        scene: Scene,
+        view: &Camera,
+        aim: Aim,
+        cube: Option<ExactCube>,
+    ) -> Result<ZoomPath, ZoomError> {
+        let tape = Tape::compile(&scene).map_err(|e| ZoomError::Compile {
+            scene: name.into(),
+            message: e.to_string(),
+        })?;
+        let eye = view.eye;
+        let d0 = tape.eval_f64([eye.x, eye.y, eye.z]).d;
+        if d0 <= 0.0 || d0.is_nan() {
+            return Err(ZoomError::EyeInside {
+                scene: name.into(),
+                x: eye.x,
+                y: eye.y,
+                z: eye.z,
+            });
+        }
+        let miss = |what: String| ZoomError::Miss {
+            scene: name.into(),
+            what,
+        };
+        let target = match aim {
+            Aim::View => view_target(&tape, view)
+                .or_else(|| {
+                    let d = view.frame().ray_dir(0.5, 0.5, 1, 1);
+                    near_surface_point(&tape, eye, d)
+                })
+                .ok_or_else(|| {
+                    miss("the view's centre ray (and 63 rays on a spiral around it)".into())
+                })?,
+            Aim::Toward(p) => {
+                let dir = (p - eye).normalize_or_zero();
+                if !p.is_finite() || dir == DVec3::ZERO {
+                    return Err(ZoomError::TowardEye {
+                        x: p.x,
+                        y: p.y,
+                        z: p.z,
+                        eye_x: eye.x,
+                        eye_y: eye.y,
+                        eye_z: eye.z,
+                    });
+                }
+                target_on(&tape, eye, dir).ok_or_else(|| {
+                    miss(format!(
+                        "the ray from the eye {:.4},{:.4},{:.4} toward {},{},{} (direction {:.4},{:.4},{:.4})",
+                        eye.x, eye.y, eye.z, p.x, p.y, p.z, dir.x, dir.y, dir.z
+                    ))
+                })?
+            }
+            Aim::Pixel {
+                x,
+                y,
+                width,
+                height,
+            } => {
+                if x >= width || y >= height {
+                    return Err(ZoomError::PixelOutside {
+                        x,
+                        y,
+                        width,
+                        height,
+                    });
+                }
+                let dir = view
+                    .frame()
+                    .ray_dir(x as f64 + 0.5, y as f64 + 0.5, width, height);
+                target_on(&tape, eye, dir).ok_or_else(|| {
+                    miss(format!(
+                        "the ray through pixel {x},{y} of the {width}x{height} view (direction {:.4},{:.4},{:.4})",
+                        dir.x, dir.y, dir.z
+                    ))
+                })?
+            }
+        };
+        Ok(ZoomPath {
+            name: name.into(),
+            fov: view.fov,
+            path: CameraPath::Zoom {
+                target,
+                dir: (eye - target).normalize(),
+                start: (eye - target).length(),
+            },
+            cube,
+            scene,
+        })
+    }
+
+    /// The camera at frame `i` of `frames` for a zoom of `depth`.
+    pub fn camera(&self, i: usize, frames: usize, depth: f64) -> Camera {
+        self.path.camera(i, frames, depth, self.fov)
+    }
+}
+
+/// The zoom target along the ray from `eye` along unit `dir`: the surface point bracketed to
+/// f64 precision ([`surface_point`]), or, for estimators that never go inside along the ray,
+/// [`near_surface_point`].
+fn target_on(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> {
+    surface_point(tape, eye, dir).or_else(|| near_surface_point(tape, eye, dir))
+}
+
+/// Relative distance (of the distance travelled) below which [`near_surface_point`] stops.
+pub const NEAR_SURFACE: f64 = 1e-7;
+
+/// For estimators that stay positive near their set (the mandelbox preset's estimate creeps
+/// along the view's centre ray at 1e-4 for thousands of steps and never goes inside, so
+/// nothing can be bracketed): the first point of the ray from `eye` along `dir` where the
+/// estimate is below [`NEAR_SURFACE`] of the distance travelled, tracing with half steps (at
+/// most 10^6 of them, within 100 world units). A zoom into it is sharp to zoom ~10^7; past
+/// that the estimator itself is the limit.
+pub fn near_surface_point(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> {
+    let mut ev = fathom_core::Evaluator::<f64>::new();
+    let mut t = 0.0f64;
+    for _ in 0..1_000_000 {
+        let p = eye + dir * t;
+        let d = ev.distance(tape, fathom_core::V3::new(p.x, p.y, p.z));
+        if d <= 0.0 || d.is_nan() {
+            return None;
+        }
+        if d < NEAR_SURFACE * t.max(1.0) {
+            return Some(p);
+        }
+        t += 0.5 * d;
+        if t > 100.0 {
+            return None;
+        }
+    }
+    None
 }
 
 /// The JSON written by `fathom zoom --stats`.
@@ -53,6 +314,8 @@ pub struct ZoomReport {
     pub summary: Summary,
     pub zoom: Vec<f64>,
     pub frames: Vec<FrameStats>,
+    /// The frames compared with the sphere tracer (`compare_every`).
+    pub compare: Vec<FrameComparison>,
 }
 
 impl Zoom {
@@ -71,7 +334,7 @@ impl Zoom {
     /// `frame` is the finished image when `want_frames`, else `None`.
     pub fn run<F>(
         &self,
-        preset: &PathPreset,
+        preset: &ZoomPath,
         want_frames: bool,
         mut on_frame: F,
     ) -> Result<ZoomReport, ZoomError>
@@ -83,8 +346,17 @@ impl Zoom {
         req.backend = Backend::Octree;
         if preset.cube.is_some() {
             req.octree.root = preset.cube;
+        } else if let Some(t) = preset.path.target() {
+            // Fit the root inside a cube that holds the target with room around it (scenes
+            // larger than the default [-4, 4]^3, such as the mandelbox preset, would be cut).
+            req.octree.fit_half = req.octree.fit_half.max(1.5 * t.abs().max_element());
         }
         let mut session = Session::new(preset.scene.clone())?;
+        let mut reference = match self.compare_every {
+            0 => None,
+            _ => Some(Reference::new(&preset.scene, &req)?),
+        };
+        let mut compare = Vec::new();
         let mut frames = Vec::with_capacity(self.frames);
         let mut zooms = Vec::with_capacity(self.frames);
         let mut stopped = None;
@@ -105,8 +377,38 @@ impl Zoom {
                     break;
                 }
             }
-            let (frame, st) = session.step_octree(&cam, &req, want_frames)?;
-            on_frame(i, z, frame.as_ref(), &st).map_err(ZoomError::Output)?;
+            let compare_now =
+                self.compare_every > 0 && (i % self.compare_every == 0 || i + 1 == self.frames);
+            let (frame, st) = session.step_octree(&cam, &req, want_frames || compare_now)?;
+            if let (true, Some(r), Some(f)) = (compare_now, reference.as_mut(), frame.as_ref()) {
+                let t0 = std::time::Instant::now();
+                let traced = r.frame(&cam)?;
+                compare.push(FrameComparison {
+                    frame: i,
+                    zoom: z,
+                    camera: cam.clone(),
+                    largest_voxel_px: st.largest_voxel_px,
+                    agreement: agreement(f, &traced),
+                    trace_ms: t0.elapsed().as_secs_f64() * 1e3,
+                });
+            }
+            if i == 0
+                && let (Some(t), Some(ex)) = (preset.path.target(), session.octree())
+                && !ex.tree.to_u(t).iter().all(|c| (0.0..=1.0).contains(c))
+            {
+                let (m, side) = (ex.tree.root_min, ex.tree.root_size);
+                return Err(ZoomError::OutsideRoot {
+                    x: t.x,
+                    y: t.y,
+                    z: t.z,
+                    min_x: m.x,
+                    min_y: m.y,
+                    min_z: m.z,
+                    side,
+                });
+            }
+            let shown = if want_frames { frame.as_ref() } else { None };
+            on_frame(i, z, shown, &st).map_err(ZoomError::Output)?;
             frames.push(st);
             zooms.push(z);
         }
@@ -114,7 +416,7 @@ impl Zoom {
         let cfg = &ex.cfg;
         let summary = Summary::new(&frames, &zooms, cfg.brick_period);
         Ok(ZoomReport {
-            preset: preset.name.into(),
+            preset: preset.name.clone(),
             traversal: cfg.traversal,
             width: cfg.width,
             height: cfg.height,
@@ -125,6 +427,7 @@ impl Zoom {
             summary,
             zoom: zooms,
             frames,
+            compare,
         })
     }
 }

@@ -13,7 +13,10 @@
 use crate::node::{EMPTY, FREE, NONE, VISITED, opposite};
 use crate::octree::{BoxU, Octree};
 
-/// Marks the bricks enclosing node `id` as visited (rays call this; atomics, no locks).
+/// Marks the bricks enclosing node `id` as visited (rays call this; atomics, no locks). The
+/// walk stops at the first brick already marked: a marked brick always has every enclosing
+/// brick marked (new children are marked with their ancestors in `generate::apply`, and
+/// [`unify`] clears every mark, leaf bricks included).
 #[inline]
 pub fn mark_visited(tree: &Octree, id: u32) {
     let nodes = &tree.nodes;
@@ -123,9 +126,16 @@ pub fn unify(tree: &mut Octree, keep_levels: u8) -> usize {
             }
             tree.nodes[x as usize].clear_flags(VISITED);
         }
+        // Leaves at a brick depth are bricks too: clear their marks, or a stale mark would
+        // stop `mark_visited`'s upward walk once the leaf is split, and the bricks above it
+        // would go unmarked and be unloaded while in view.
+        let leaf_bricks = tree.is_brick_depth(xb.depth + 1);
         for o in 0..8 {
-            if tree.nodes[(first + o) as usize].children != NONE {
+            let c = &tree.nodes[(first + o) as usize];
+            if c.children != NONE {
                 stack.push((first + o, xb.child(o as usize)));
+            } else if leaf_bricks {
+                c.clear_flags(VISITED);
             }
         }
     }

@@ -15,9 +15,9 @@
 
 use crate::error::OctreeError;
 use crate::evict::unify;
-use crate::generate::{Children, Outcome, Shader, apply, eval_children, init_root};
+use crate::generate::{Children, Outcome, Shader, View, apply, eval_children, init_root};
 use crate::node::{NONE, REQUESTED, pack_rgb};
-use crate::octree::{BoxU, Octree};
+use crate::octree::{BoxU, Octree, dim_at};
 use crate::root::RootSpec;
 use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
 use fathom_core::eval::Evaluator;
@@ -135,6 +135,9 @@ pub struct SvoImage {
     pub colour: Vec<u32>,
     /// Distance along the ray in world units.
     pub depth: Vec<f32>,
+    /// The largest voxel any pixel shows, in pixels: its side over the pixel footprint at the
+    /// distance where the ray met it (0 when nothing was hit; at most [`MAX_VOXEL_PX`]).
+    pub largest_voxel_px: f64,
 }
 
 impl SvoImage {
@@ -210,6 +213,8 @@ pub struct FrameStats {
     pub resident_bytes: u64,
     /// Depth of the skip node (-1 when the eye is outside the root).
     pub skip_depth: i32,
+    /// The largest voxel visible in this frame, in pixels ([`SvoImage::largest_voxel_px`]).
+    pub largest_voxel_px: f64,
 }
 
 /// Resident set size of this process in bytes (Linux), or 0.
@@ -337,6 +342,10 @@ impl Explorer {
     /// the subdivision requests and (rays, hits, node steps).
     pub fn render(&mut self, cam: &Camera) -> (SvoImage, Vec<Request>, [u64; 3]) {
         let frame = cam.frame();
+        self.shader.view = View {
+            eye: cam.eye,
+            scale: (cam.target - cam.eye).length().max(1e-300),
+        };
         let o = self.tree.to_u(cam.eye);
         self.update_skip(o);
         self.clear_eye(o);
@@ -349,7 +358,8 @@ impl Explorer {
         let trav = self.cfg.traversal;
         let sky = self.sky;
         let size = tree.root_size;
-        let (reqs, counts) = self.pool.install(|| {
+        let pa = frame.pixel_angle(h);
+        let (reqs, counts, largest) = self.pool.install(|| {
             colour
                 .par_chunks_mut(w as usize)
                 .zip(depth.par_chunks_mut(w as usize))
@@ -357,6 +367,7 @@ impl Explorer {
                 .map(|(y, (crow, drow))| {
                     let mut reqs = Vec::new();
                     let mut c = [0u64; 3];
+                    let mut largest = 0f64;
                     // Where the previous ray of this row entered the root (eye outside).
                     let mut entry = None;
                     for x in 0..w as usize {
@@ -367,6 +378,9 @@ impl Explorer {
                         c[2] += hit.steps as u64;
                         if hit.is_hit() {
                             c[1] += 1;
+                            let side = dim_at(tree.nodes[hit.node as usize].depth);
+                            let px = (side / (hit.t * pa)).min(MAX_VOXEL_PX);
+                            largest = largest.max(px);
                             crow[x] = hit.colour;
                             drow[x] = (hit.t * size) as f32;
                         } else {
@@ -374,13 +388,17 @@ impl Explorer {
                             drow[x] = f32::INFINITY;
                         }
                     }
-                    (reqs, c)
+                    (reqs, c, largest)
                 })
                 .reduce(
-                    || (Vec::new(), [0u64; 3]),
-                    |(mut ra, ca), (rb, cb)| {
+                    || (Vec::new(), [0u64; 3], 0f64),
+                    |(mut ra, ca, la), (rb, cb, lb)| {
                         ra.extend(rb);
-                        (ra, [ca[0] + cb[0], ca[1] + cb[1], ca[2] + cb[2]])
+                        (
+                            ra,
+                            [ca[0] + cb[0], ca[1] + cb[1], ca[2] + cb[2]],
+                            la.max(lb),
+                        )
                     },
                 )
         });
@@ -389,6 +407,7 @@ impl Explorer {
             height: h,
             colour,
             depth,
+            largest_voxel_px: largest,
         };
         (img, reqs, counts)
     }
@@ -397,7 +416,7 @@ impl Explorer {
     /// (split, emptied, no-memory).
     pub fn subdivide(&mut self, mut reqs: Vec<Request>, budget_ms: f64) -> [u64; 3] {
         let t0 = Instant::now();
-        reqs.sort_unstable_by_key(|r| (r.b.depth, r.id));
+        order_requests(&mut reqs);
         let mut out = [0u64; 3];
         let mut next = 0;
         let batch = 64 * self.cfg.threads.max(1);
@@ -503,6 +522,7 @@ impl Explorer {
             arena_bytes: self.tree.arena_bytes() as u64,
             resident_bytes: resident_bytes(),
             skip_depth: self.skip.map(|s| s.1.depth as i32).unwrap_or(-1),
+            largest_voxel_px: img.largest_voxel_px,
         };
         self.frame += 1;
         (img, stats)
@@ -522,6 +542,23 @@ impl Explorer {
     }
 }
 
+/// Sorts requests largest on screen first (side over the distance at which a ray reached the
+/// voxel; ties by node id, so the order does not depend on which ray claimed a leaf first
+/// beyond its distance). A zoom's frames then lose their biggest blocks first: the time budget
+/// goes to the voxels that spoil the picture most, not to the shallowest ones (a shallow voxel
+/// far away can be smaller on screen than a deep one in front of the eye).
+pub fn order_requests(reqs: &mut [Request]) {
+    reqs.sort_unstable_by(|a, b| {
+        b.footprint()
+            .total_cmp(&a.footprint())
+            .then(a.id.cmp(&b.id))
+    });
+}
+
+/// Voxels seen from closer than this many pixel footprints' worth (the eye inside a full
+/// voxel, `t` = 0) count as this many pixels: keeps the figure finite for JSON.
+pub const MAX_VOXEL_PX: f64 = 1e6;
+
 fn cast(
     tree: &Octree,
     ray: &Ray,
@@ -536,10 +573,42 @@ fn cast(
     }
 }
 
+/// The sphere tracer's sky (`fathom_trace::shade::Shading::sky`): a gradient on the square
+/// root of the direction's height, so octree and tracer frames agree off the surface.
 fn sky_colour(frame: &CameraFrame, d: DVec3, sky: ([f64; 3], [f64; 3])) -> u32 {
-    let k = d.dot(DVec3::Y).max(0.0);
+    let k = d.y.clamp(0.0, 1.0).sqrt();
     let _ = frame;
     pack_rgb(std::array::from_fn(|i| {
         sky.0[i] + (sky.1[i] - sky.0[i]) * k
     }))
+}
+
+#[cfg(test)]
+mod order_tests {
+    use super::*;
+
+    #[test]
+    fn requests_are_served_largest_on_screen_first() {
+        let b = |d: u8| (0..d).fold(BoxU::ROOT, |b, _| b.child(0));
+        // A deep voxel close to the eye is larger on screen than a shallow one far away.
+        let mut r = vec![
+            Request {
+                id: 1,
+                b: b(2),
+                t: 100.0,
+            },
+            Request {
+                id: 2,
+                b: b(6),
+                t: 0.001,
+            },
+            Request {
+                id: 3,
+                b: b(3),
+                t: 1.0,
+            },
+        ];
+        order_requests(&mut r);
+        assert_eq!(r.iter().map(|q| q.id).collect::<Vec<_>>(), [2, 3, 1]);
+    }
 }

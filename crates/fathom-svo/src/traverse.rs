@@ -87,6 +87,16 @@ pub struct Request {
     pub id: u32,
     /// Its box.
     pub b: BoxU,
+    /// Distance (root units) at which the ray that asked reached it: `b.dim() / t` is its
+    /// angular size on screen, the order in which requests are served.
+    pub t: f64,
+}
+
+impl Request {
+    /// Angular size on screen (radians, small-angle): side over distance; infinite at `t = 0`.
+    pub fn footprint(&self) -> f64 {
+        self.b.dim() / self.t
+    }
 }
 
 /// Where a ray starts: the leaf containing the eye and its box.
@@ -225,7 +235,7 @@ fn stop_here(
         return None;
     }
     if b.dim() > t * lod && b.depth < MAX_DEPTH && n.claim(REQUESTED) {
-        reqs.push(Request { id, b: *b });
+        reqs.push(Request { id, b: *b, t });
     }
     Some(Hit {
         t,

@@ -4,7 +4,8 @@
 //! Experiments: fps against zoom depth for neighbour vs kd-restart traversal (Menger and
 //! Mandelbulb); node and brick count over the zoom; fps against image size and fidelity;
 //! 1 vs 2 threads; outline agreement with a sphere tracer; strict self-similarity of Menger
-//! frames at 1/3, 1/9, 1/27 of the distance.
+//! frames at 1/3, 1/9, 1/27 of the distance; picture quality during a short zoom (per decade:
+//! SSIM, silhouette IoU and colour error against the sphere tracer, largest visible voxel).
 
 use crate::args::parse_size;
 use clap::Args;
@@ -37,6 +38,110 @@ pub struct SvoArgs {
     /// Small and fast: 160x120, 150 frames, zoom 1e5 (a smoke test of the whole bench).
     #[arg(long)]
     pub quick: bool,
+    /// Frames of the picture-quality zooms (compared with the sphere tracer).
+    #[arg(long, default_value_t = 300)]
+    pub quality_frames: usize,
+    /// Compare every this many frames with the tracer in the picture-quality zooms (>= 1).
+    #[arg(long, default_value_t = 10)]
+    pub compare_every: usize,
+    /// Run only the picture-quality zooms (per-decade similarity and largest voxel).
+    #[arg(long)]
+    pub quality_only: bool,
+}
+
+/// Picture quality of one decade of a zoom: medians over the frames compared with the tracer
+/// (SSIM of luminance, silhouette IoU, colour error) and the largest visible voxel over every
+/// frame of the decade.
+#[derive(Serialize, Clone, Debug)]
+struct DecadeQuality {
+    preset: String,
+    /// log10 of the decade's lower zoom.
+    decade: i32,
+    compared: usize,
+    median_ssim: f64,
+    median_iou: f64,
+    median_colour_error: f64,
+    median_largest_voxel_px: f64,
+    max_largest_voxel_px: f64,
+}
+
+/// Per-decade picture quality of a zoom report with comparisons.
+fn quality_per_decade(preset: &str, r: &ZoomReport) -> Vec<DecadeQuality> {
+    let top = r.zoom.iter().copied().fold(1.0, f64::max).log10().ceil() as i32;
+    let dec = |z: f64| (z.log10().floor() as i32).min(top.max(1) - 1);
+    (0..top.max(1))
+        .filter_map(|d| {
+            let c: Vec<_> = r.compare.iter().filter(|c| dec(c.zoom) == d).collect();
+            let vox: Vec<f64> = r
+                .frames
+                .iter()
+                .zip(&r.zoom)
+                .filter(|(_, z)| dec(**z) == d)
+                .map(|(f, _)| f.largest_voxel_px)
+                .collect();
+            if vox.is_empty() {
+                return None;
+            }
+            let m = |f: &dyn Fn(&fathom_render::zoom::FrameComparison) -> f64| {
+                median(&c.iter().map(|x| f(x)).collect::<Vec<_>>())
+            };
+            Some(DecadeQuality {
+                preset: preset.into(),
+                decade: d,
+                compared: c.len(),
+                median_ssim: m(&|x| x.agreement.ssim),
+                median_iou: m(&|x| x.agreement.iou),
+                median_colour_error: m(&|x| x.agreement.colour_error),
+                median_largest_voxel_px: median(&vox),
+                max_largest_voxel_px: vox.iter().copied().fold(0.0, f64::max),
+            })
+        })
+        .collect()
+}
+
+/// The picture-quality section: short zooms of Menger and the Mandelbulb compared with the
+/// sphere tracer every `every` frames; appends a table to `md` and returns the rows.
+fn quality(
+    md: &mut String,
+    frames: usize,
+    depth: f64,
+    size: &str,
+    every: usize,
+) -> Result<Vec<DecadeQuality>, String> {
+    if every == 0 {
+        return Err("--compare-every must be >= 1".into());
+    }
+    let _ = writeln!(
+        md,
+        "## Picture quality during the zoom ({frames} frames to zoom {depth:.0e}, {size}, compared with the sphere tracer every {every} frames)\n\n\
+         SSIM of display luminance (8x8 windows every 4 pixels), silhouette IoU and mean display-colour error per channel against the CPU sphere tracer at the same camera (soft shadows off: the octree bakes none); largest visible voxel in pixels over every frame of the decade.\n\n\
+         | preset | zoom decade | frames compared | median SSIM | median IoU | median colour error | median largest voxel px | max largest voxel px |\n|---|---|---|---|---|---|---|---|"
+    );
+    let mut rows = Vec::new();
+    for preset in ["menger", "mandelbulb"] {
+        eprintln!("bench svo: picture quality, {preset}");
+        let mut z = zoom(Traversal::Neighbour, frames, depth, size)?;
+        z.compare_every = every;
+        let r = run_zoom(preset, &z)?;
+        for q in quality_per_decade(preset, &r) {
+            let _ = writeln!(
+                md,
+                "| {} | 1e{}-1e{} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} |",
+                q.preset,
+                q.decade,
+                q.decade + 1,
+                q.compared,
+                q.median_ssim,
+                q.median_iou,
+                q.median_colour_error,
+                q.median_largest_voxel_px,
+                q.max_largest_voxel_px
+            );
+            rows.push(q);
+        }
+    }
+    let _ = writeln!(md);
+    Ok(rows)
 }
 
 #[derive(Serialize, Default)]
@@ -45,6 +150,7 @@ struct Results {
     size_fidelity: Vec<(String, f64, f64)>,
     threads: Vec<(usize, f64)>,
     outline: Vec<(String, fathom_svo::outline::Agreement)>,
+    quality: Vec<DecadeQuality>,
     self_similarity: Vec<(String, f64, f64)>,
 }
 
@@ -73,13 +179,14 @@ fn zoom(t: Traversal, frames: usize, depth: f64, size: &str) -> Result<Zoom, Str
             },
             ..RenderRequest::default()
         },
+        compare_every: 0,
     })
 }
 
 /// Runs a zoom of `preset` without writing frames.
 fn run_zoom(preset: &str, z: &Zoom) -> Result<ZoomReport, String> {
     let p = path_preset(preset).map_err(|e| e.to_string())?;
-    z.run(&p, false, |_, _, _, _| Ok(()))
+    z.run(&p.into(), false, |_, _, _, _| Ok(()))
         .map_err(|e| e.to_string())
 }
 
@@ -162,6 +269,17 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
          Plots have no text (no font in the bitmap backend); each plot's axes and series are listed under it.\n",
         if a.quick { " --quick" } else { "" }
     );
+
+    // 0. Picture quality during a short zoom.
+    let (qf, qe) = if a.quick {
+        (60, 5)
+    } else {
+        (a.quality_frames, a.compare_every)
+    };
+    res.quality = quality(&mut md, qf, depth, &size, qe)?;
+    if a.quality_only {
+        return write_report(&a.out, &md, &res);
+    }
 
     // 1. fps against zoom depth, neighbour vs kd-restart; node and brick counts.
     let _ = writeln!(
@@ -373,12 +491,74 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
         res.self_similarity.push((name, same, close));
     }
 
-    std::fs::write(a.out.join("report.md"), &md).map_err(|e| e.to_string())?;
+    write_report(&a.out, &md, &res)
+}
+
+/// Writes report.md and results.json to `out` and prints the report.
+fn write_report(out: &FsPath, md: &str, res: &Results) -> Result<(), String> {
+    std::fs::write(out.join("report.md"), md).map_err(|e| e.to_string())?;
     std::fs::write(
-        a.out.join("results.json"),
-        serde_json::to_string_pretty(&res).map_err(|e| e.to_string())?,
+        out.join("results.json"),
+        serde_json::to_string_pretty(res).map_err(|e| e.to_string())?,
     )
     .map_err(|e| e.to_string())?;
     println!("{md}");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fathom_render::compare::Agreement;
+    use fathom_render::zoom::FrameComparison;
+    use fathom_svo::FrameStats;
+
+    #[test]
+    fn picture_quality_is_summarised_per_decade() {
+        let zoom: Vec<f64> = (0..7).map(|i| 10f64.powf(i as f64 * 0.5)).collect(); // 1 .. 1e3
+        let frames: Vec<FrameStats> = (0..7)
+            .map(|i| FrameStats {
+                frame: i,
+                largest_voxel_px: 10.0 - i as f64,
+                ..FrameStats::default()
+            })
+            .collect();
+        let cmp = |i: usize, ssim: f64| FrameComparison {
+            frame: i,
+            zoom: zoom[i],
+            camera: fathom_core::Camera::default(),
+            largest_voxel_px: frames[i].largest_voxel_px,
+            agreement: Agreement {
+                ssim,
+                iou: 1.0,
+                colour_error: 0.0,
+                colour_within: 1.0,
+            },
+            trace_ms: 0.0,
+        };
+        let r = ZoomReport {
+            preset: "p".into(),
+            traversal: Traversal::Neighbour,
+            width: 8,
+            height: 6,
+            depth: 1e3,
+            threads: 1,
+            fidelity: 1.0,
+            stopped: None,
+            summary: Default::default(),
+            zoom: zoom.clone(),
+            frames: frames.clone(),
+            compare: vec![cmp(0, 0.2), cmp(1, 0.4), cmp(4, 0.9), cmp(6, 0.95)],
+        };
+        let q = quality_per_decade("p", &r);
+        // Decades 1-10 (frames 0, 1), 10-100 (2, 3), 100-1000 (4, 5, and the last frame at
+        // exactly 1e3 counts in the top decade).
+        assert_eq!(q.iter().map(|d| d.decade).collect::<Vec<_>>(), [0, 1, 2]);
+        assert_eq!(q[0].compared, 2);
+        assert!((q[0].median_ssim - 0.3).abs() < 1e-12);
+        assert_eq!(q[0].max_largest_voxel_px, 10.0);
+        assert_eq!(q[1].compared, 0);
+        assert_eq!(q[2].compared, 2);
+        assert_eq!(q[2].median_largest_voxel_px, 5.0);
+    }
 }

@@ -239,10 +239,19 @@ pub fn zoom_shard(a: &ZoomArgs) -> Result<(), String> {
         .as_deref()
         .ok_or("a zoom farm shard writes into a directory: give -o DIR")?;
     let z = crate::cmd_zoom::zoom(a)?;
-    let preset = fathom_core::camera_path::path_preset(&a.preset).map_err(|e| e.to_string())?;
+    // Farm workers rebuild the path from its preset name: path presets only, no aim.
+    if a.scene.is_some() || a.toward.is_some() || a.pixel.is_some() {
+        return Err(
+            "--shard renders the path presets (menger, mandelbulb, menger-tour) only: a scene \
+             file, --toward and --pixel are not supported with --shard"
+                .into(),
+        );
+    }
+    let name = a.preset.clone().unwrap_or_else(|| "menger".into());
+    let preset = fathom_core::camera_path::path_preset(&name).map_err(|e| e.to_string())?;
     let text = fathom_core::scene_file::to_string(&preset.scene);
     let work = Work::Zoom {
-        preset: a.preset.clone(),
+        preset: name,
         depth: a.depth,
         frames: a.frames,
     };

@@ -2,12 +2,14 @@
 //! (a point-of-recursion zoom or a tour), writing frames and per-frame stats. The flags become
 //! a [`Zoom`] of the render layer, which runs the frame loop; this module writes the frames.
 
-use crate::args::{parse_bytes, parse_size};
+use crate::args::{parse_bytes, parse_size, parse_vec};
 use clap::{Args, ValueEnum};
 use fathom_core::camera_path::{PATH_PRESETS, path_preset};
-use fathom_render::zoom::{Zoom, ZoomReport};
+use fathom_core::{presets, scene_file};
+use fathom_render::zoom::{Aim, Zoom, ZoomPath, ZoomReport};
 use fathom_render::{OctreeSettings, RenderRequest};
 use fathom_svo::Traversal;
+use glam::DVec3;
 use std::path::PathBuf;
 
 /// Traversal choice on the command line.
@@ -34,8 +36,16 @@ impl From<TraversalArg> for Traversal {
 /// ray visited are unloaded to stay within --max-memory, and a zoom past f64 precision stops
 /// with a message instead of rendering garbage. Prints a one-line summary at the end.
 ///
+/// Any scene zooms: a scene preset or a scene file zooms from its camera into the surface
+/// point of its centre ray (or the first hit on a spiral around it), of the ray through
+/// --pixel X,Y, or of the ray toward --toward x,y,z; the point is bracketed to f64 precision
+/// on the surface and the camera turns to look at it.
+///
 /// Examples:
 ///   fathom zoom --preset menger --depth 1e11 --frames 300 --stats zoom.json
+///   fathom zoom --preset sierpinski --pixel 320,160 --depth 1e9 -o frames/
+///   fathom zoom my-scene.ron --toward 0.3,0.2,1 --depth 1e8 --stats z.json
+///   fathom zoom --preset mandelbulb --compare-every 10 --stats z.json   (vs the tracer)
 ///   fathom zoom --preset mandelbulb --frames 600 -o frames/        (PNG per frame)
 ///   fathom zoom --preset menger --traversal kdrestart --stats kd.json   (the baseline)
 ///   fathom zoom --preset menger-tour --frames 900 --size 1280x720 -o tour/
@@ -44,10 +54,20 @@ impl From<TraversalArg> for Traversal {
 #[derive(Args, Clone)]
 #[command(verbatim_doc_comment)]
 pub struct ZoomArgs {
-    /// Path preset: menger (zoom into the corner, a point of recursion), mandelbulb (zoom
-    /// into a surface point), menger-tour (a flight around and into the sponge).
-    #[arg(long, default_value = "menger", value_parser = clap::builder::PossibleValuesParser::new(PATH_PRESETS))]
-    pub preset: String,
+    /// Scene file (.ron) to zoom into; omit to use --preset.
+    pub scene: Option<PathBuf>,
+    /// A path preset: menger (zoom into the corner, a point of recursion), mandelbulb (zoom
+    /// into a surface point), menger-tour (a flight around and into the sponge); or any scene
+    /// preset (`fathom list presets`), zoomed into from its camera. Default: menger.
+    #[arg(long, conflicts_with = "scene")]
+    pub preset: Option<String>,
+    /// Zoom into the surface where the ray from the eye toward this point x,y,z meets it.
+    #[arg(long, value_parser = parse_vec, allow_hyphen_values = true, conflicts_with = "pixel")]
+    pub toward: Option<DVec3>,
+    /// Zoom into the surface this pixel X,Y of the first frame shows (0,0 is the top left of
+    /// a --size image of the view).
+    #[arg(long, value_parser = parse_pixel)]
+    pub pixel: Option<(u32, u32)>,
     /// Zoom factor from the first to the last frame (ratio of eye distances), >= 1.
     #[arg(long, default_value_t = 1e11)]
     pub depth: f64,
@@ -85,12 +105,74 @@ pub struct ZoomArgs {
     /// tracer's post effect), [0, 4].
     #[arg(long, default_value_t = 1.0)]
     pub ssao: f32,
+    /// Every N frames (and the last), also render the frame with the sphere tracer at the
+    /// same camera and write to --stats its SSIM (luminance), silhouette IoU, colour error,
+    /// largest visible voxel in pixels and camera (0: never; the tracer's time is not counted
+    /// in the zoom's frame times, but it slows the run).
+    #[arg(long, default_value_t = 0)]
+    pub compare_every: usize,
     /// Render farm: render shard I of N of the zoom's frames into the job directory -o DIR,
     /// each frame a settled still on a fresh octree (so it does not depend on the frames
     /// before it; slower than the stepped zoom, and not the same images). Without a value:
-    /// from SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT.
+    /// from SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT. Path presets only.
     #[arg(long, value_name = "I/N", num_args = 0..=1, default_missing_value = "")]
     pub shard: Option<String>,
+}
+
+/// Parses `X,Y` (two whole numbers).
+pub fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let v: Vec<&str> = s.split(',').collect();
+    let p = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("pixel `{s}`: `{t}` is not a whole number >= 0"))
+    };
+    match v[..] {
+        [x, y] => Ok((p(x)?, p(y)?)),
+        _ => Err(format!("pixel `{s}` should be two whole numbers X,Y")),
+    }
+}
+
+/// The path these flags describe: a path preset as it is, or a scene (preset or file) with an
+/// aim (the view's centre, --pixel or --toward). A path preset with an aim zooms from its
+/// first camera.
+pub fn zoom_path(a: &ZoomArgs) -> Result<ZoomPath, String> {
+    let (width, height) = parse_size(&a.size)?;
+    let aim = match (a.toward, a.pixel) {
+        (Some(p), _) => Some(Aim::Toward(p)),
+        (None, Some((x, y))) => Some(Aim::Pixel {
+            x,
+            y,
+            width,
+            height,
+        }),
+        (None, None) => None,
+    };
+    let (name, scene, view, cube) = match (&a.scene, a.preset.as_deref()) {
+        (Some(path), _) => {
+            let scene = scene_file::load(path).map_err(|e| e.to_string())?;
+            scene.validate().map_err(|e| e.to_string())?;
+            let view = scene.camera.clone();
+            (path.display().to_string(), scene, view, None)
+        }
+        (None, p) => {
+            let name = p.unwrap_or("menger");
+            if PATH_PRESETS.contains(&name) {
+                let pp = path_preset(name).map_err(|e| e.to_string())?;
+                let Some(aim) = aim else {
+                    return Ok(pp.into());
+                };
+                let view = pp.camera(0, a.frames.max(1), a.depth.max(1.0));
+                return ZoomPath::aim(name, pp.scene, &view, aim, pp.cube)
+                    .map_err(|e| e.to_string());
+            }
+            let scene = presets::load(name)
+                .map_err(|e| format!("{e} (or a path preset: {})", PATH_PRESETS.join(", ")))?;
+            let view = scene.camera.clone();
+            (name.to_string(), scene, view, None)
+        }
+    };
+    ZoomPath::aim(&name, scene, &view, aim.unwrap_or(Aim::View), cube).map_err(|e| e.to_string())
 }
 
 /// The zoom these flags describe, checked.
@@ -115,6 +197,7 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
             },
             ..RenderRequest::default()
         },
+        compare_every: a.compare_every,
     };
     z.validate().map_err(|e| e.to_string())?;
     z.request.validate().map_err(|e| e.to_string())?;
@@ -125,7 +208,7 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
 /// unless `quiet`. Returns the report.
 pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
     let z = zoom(a)?;
-    let preset = path_preset(&a.preset).map_err(|e| e.to_string())?;
+    let preset = zoom_path(a)?;
     if let Some(dir) = &a.output {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
@@ -174,6 +257,22 @@ pub fn run(a: ZoomArgs) -> Result<(), String> {
         s.peak_resident_bytes as f64 / (1 << 20) as f64,
         s.max_over_first_cycle
     );
+    if !report.compare.is_empty() {
+        let c = &report.compare;
+        let med = |f: &dyn Fn(&fathom_render::zoom::FrameComparison) -> f64| {
+            fathom_svo::stats::median(&c.iter().map(f).collect::<Vec<_>>())
+        };
+        println!(
+            "compared {} frames with the sphere tracer: median SSIM {:.3}, median silhouette IoU {:.3}, \
+             median colour error {:.3}, median largest voxel {:.2} px (largest {:.2} px)",
+            c.len(),
+            med(&|x| x.agreement.ssim),
+            med(&|x| x.agreement.iou),
+            med(&|x| x.agreement.colour_error),
+            med(&|x| x.largest_voxel_px),
+            c.iter().map(|x| x.largest_voxel_px).fold(0.0, f64::max)
+        );
+    }
     if let Some(path) = &a.stats {
         let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
         std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
@@ -214,6 +313,156 @@ mod tests {
         a.unify_every = 4;
         a.max_memory = "1K".into();
         assert!(zoom(&a).err().unwrap().contains("max memory"));
+    }
+
+    #[test]
+    fn compared_frames_carry_similarity_voxel_size_and_camera() {
+        let mut a = args();
+        a.frames = 5;
+        a.compare_every = 2;
+        let r = run_zoom(&a, true).unwrap();
+        let frames: Vec<usize> = r.compare.iter().map(|c| c.frame).collect();
+        assert_eq!(frames, [0, 2, 4]);
+        for c in &r.compare {
+            assert!((-1.0..=1.0).contains(&c.agreement.ssim), "{c:?}");
+            assert!((0.0..=1.0).contains(&c.agreement.iou), "{c:?}");
+            assert!(c.largest_voxel_px > 0.0, "{c:?}");
+        }
+        // The zoom moves the camera: each comparison has its own.
+        assert_ne!(r.compare[0].camera.eye, r.compare[2].camera.eye);
+        let json = serde_json::to_value(&r).unwrap();
+        let c0 = &json["compare"][0];
+        for key in [
+            "ssim",
+            "iou",
+            "colour_error",
+            "largest_voxel_px",
+            "camera",
+            "zoom",
+        ] {
+            assert!(!c0[key].is_null(), "{key} missing in {c0}");
+        }
+        assert!(json["frames"][0]["largest_voxel_px"].is_number());
+        // Off by default: no tracer frames.
+        a.compare_every = 0;
+        assert!(run_zoom(&a, true).unwrap().compare.is_empty());
+    }
+
+    #[test]
+    fn every_scene_preset_and_a_scene_file_zoom_into_their_surface() {
+        for p in fathom_core::presets::PRESETS {
+            let mut a = args();
+            a.preset = Some(p.name.into());
+            let r = run_zoom(&a, true).unwrap_or_else(|e| panic!("{}: {e}", p.name));
+            assert_eq!(r.preset, p.name);
+            let last = r.frames.last().unwrap();
+            assert!(last.hits > 0, "{}: the last frame shows no surface", p.name);
+        }
+        // A user's scene file: the mandelbulb preset's text saved to disk, aimed at a pixel.
+        let dir = std::env::temp_dir().join(format!("fathom-zoom-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("mine.ron");
+        std::fs::write(
+            &file,
+            fathom_core::presets::find("mandelbulb").unwrap().text,
+        )
+        .unwrap();
+        let mut a = args();
+        a.scene = Some(file.clone());
+        a.pixel = Some((16, 12));
+        let r = run_zoom(&a, true).unwrap();
+        assert!(r.preset.ends_with("mine.ron"), "{}", r.preset);
+        assert!(r.frames.last().unwrap().hits > 0);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn aimed_zooms_end_on_the_surface_they_aim_at() {
+        // Toward the Menger sponge's centre from the path's first camera: the target is on
+        // the sponge's surface, between the eye and the centre.
+        let mut a = args();
+        a.toward = Some(DVec3::ZERO);
+        let p = zoom_path(&a).unwrap();
+        let t = p.path.target().unwrap();
+        let tape = fathom_core::Tape::compile(&p.scene).unwrap();
+        let d = tape.eval_f64([t.x, t.y, t.z]).d;
+        assert!(d > 0.0 && d < 1e-9, "distance at the target {d}");
+        let m = t.abs().max_element();
+        assert!(
+            m > 0.99 && m <= 1.0 + 1e-12,
+            "{t} is not on the sponge's outer faces"
+        );
+        let eye = path_preset("menger").unwrap().camera(0, 3, 1e3).eye;
+        assert!(
+            eye.normalize().dot(t.normalize()) > 1.0 - 1e-12,
+            "{t} is off the ray"
+        );
+        // A pixel of the mandelbulb preset's view: the first camera looks at its target.
+        let mut a = args();
+        a.preset = Some("mandelbulb".into());
+        a.pixel = Some((20, 10));
+        let p = zoom_path(&a).unwrap();
+        let c = p.camera(0, 3, 1e3);
+        assert!((c.target - p.path.target().unwrap()).length() < 1e-12);
+    }
+
+    #[test]
+    fn bad_aims_are_refused_with_what_missed() {
+        let mut a = args();
+        a.preset = Some("sierpinski".into());
+        // The top-left pixel of the preset's view is sky.
+        a.pixel = Some((0, 0));
+        let e = zoom_path(&a).unwrap_err();
+        assert!(e.contains("pixel 0,0") && e.contains("misses"), "{e}");
+        a.pixel = Some((32, 5));
+        let e = zoom_path(&a).unwrap_err();
+        assert!(e.contains("outside the 32x24 image"), "{e}");
+        a.pixel = None;
+        // Away from the scene: behind the preset's eye.
+        let eye = fathom_core::presets::load("sierpinski").unwrap().camera.eye;
+        a.toward = Some(eye * 2.0);
+        let e = zoom_path(&a).unwrap_err();
+        assert!(
+            e.contains("toward") && e.contains("direction") && e.contains("misses"),
+            "{e}"
+        );
+        a.toward = Some(eye);
+        let e = zoom_path(&a).unwrap_err();
+        assert!(e.contains("no direction"), "{e}");
+        a.toward = None;
+        a.preset = Some("mandlebulb".into());
+        let e = zoom_path(&a).unwrap_err();
+        assert!(e.contains("mandelbulb") && e.contains("path preset"), "{e}");
+        assert!(parse_pixel("3").is_err() && parse_pixel("a,2").is_err());
+        assert_eq!(parse_pixel("3, 4"), Ok((3, 4)));
+        let mut a = args();
+        a.scene = Some("/nonexistent/scene.ron".into());
+        assert!(zoom_path(&a).unwrap_err().contains("scene.ron"));
+    }
+
+    #[test]
+    fn farm_shards_refuse_aims_and_scene_presets_they_cannot_rebuild() {
+        let mut a = args();
+        a.shard = Some("0/1".into());
+        a.output = Some(std::env::temp_dir().join("fathom-zoom-shard-refusal"));
+        a.pixel = Some((1, 1));
+        let e = crate::cmd_farm::zoom_shard(&a).unwrap_err();
+        assert!(e.contains("--shard renders the path presets"), "{e}");
+        a.pixel = None;
+        a.preset = Some("sierpinski".into());
+        let e = crate::cmd_farm::zoom_shard(&a).unwrap_err();
+        assert!(e.contains("sierpinski"), "{e}");
+    }
+
+    #[test]
+    fn a_zoom_into_any_scene_stops_at_the_precision_limit_too() {
+        let mut a = args();
+        a.preset = Some("sierpinski".into());
+        a.depth = 1e20;
+        a.frames = 40;
+        let r = run_zoom(&a, true).unwrap();
+        let msg = r.stopped.expect("the zoom should have stopped");
+        assert!(msg.contains("precision limit"), "{msg}");
     }
 
     #[test]
