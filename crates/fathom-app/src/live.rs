@@ -226,23 +226,10 @@ impl Live {
     }
 }
 
-/// The path clock (before easing) at wall time `t`: `Keyframe::time` pins are on this clock.
-/// The same formula as `Flight`'s easing (constant acceleration over `ease_in` and
-/// `ease_out` seconds at the ends).
+/// The path clock (before easing) at wall time `t`: `Keyframe::time` pins are on this clock
+/// (`Flight`'s own easing, `fathom_core::flight::path_clock`).
 pub fn path_clock(p: &FlightPath, t: f64) -> f64 {
-    let (d, a, b) = (p.duration, p.ease_in, p.ease_out);
-    let t = t.clamp(0.0, d);
-    if a == 0.0 && b == 0.0 {
-        return t;
-    }
-    let v = d / (d - 0.5 * a - 0.5 * b);
-    if t < a {
-        v * t * t / (2.0 * a)
-    } else if t > d - b {
-        d - v * (d - t) * (d - t) / (2.0 * b)
-    } else {
-        v * (t - 0.5 * a)
-    }
+    fathom_core::flight::path_clock(p.duration, p.ease_in, p.ease_out, t)
 }
 
 /// Adds a key at `camera` to path `index` of `scene` at wall time `t` (a document edit; the

@@ -676,6 +676,25 @@ pub struct Flight {
     tracks: Vec<Track>,
 }
 
+/// The path clock (before easing) at wall time `t` of a path `duration` seconds long that
+/// accelerates from rest over its first `ease_in` seconds and comes to rest over its last
+/// `ease_out` (constant acceleration): the clock keyframe times (`Keyframe::time`) are on.
+pub fn path_clock(duration: f64, ease_in: f64, ease_out: f64, t: f64) -> f64 {
+    let (d, a, b) = (duration, ease_in, ease_out);
+    let t = t.clamp(0.0, d);
+    if a == 0.0 && b == 0.0 {
+        return t;
+    }
+    let v = d / (d - 0.5 * a - 0.5 * b);
+    if t < a {
+        v * t * t / (2.0 * a)
+    } else if t > d - b {
+        d - v * (d - t) * (d - t) / (2.0 * b)
+    } else {
+        v * (t - 0.5 * a)
+    }
+}
+
 /// The state of a flight at one time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pose {
@@ -720,19 +739,7 @@ impl Flight {
 
     /// Path clock (before easing) at wall time `t`.
     fn ease(&self, t: f64) -> f64 {
-        let (d, a, b) = (self.duration, self.ease_in, self.ease_out);
-        let t = t.clamp(0.0, d);
-        if a == 0.0 && b == 0.0 {
-            return t;
-        }
-        let v = d / (d - 0.5 * a - 0.5 * b);
-        if t < a {
-            v * t * t / (2.0 * a)
-        } else if t > d - b {
-            d - v * (d - t) * (d - t) / (2.0 * b)
-        } else {
-            v * (t - 0.5 * a)
-        }
+        path_clock(self.duration, self.ease_in, self.ease_out, t)
     }
 
     /// Wall time at path clock `tau` (the inverse of `ease`).

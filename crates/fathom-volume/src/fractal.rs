@@ -92,33 +92,17 @@ pub fn sample(
     slice_done: &(dyn Fn() + Sync),
 ) -> Result<DensityGrid, VolumeError> {
     check_range("smooth", smooth as f64, 0.0, MAX_SMOOTH)?;
-    let mut g = Grid::<f32>::new(res, bbox, limit)?;
-    let [rx, ry, _] = res.map(|r| r as usize);
     let size = bbox.extent() / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
     let ramp = smooth * size.min_element();
-    g.data_mut()
-        .par_chunks_mut(rx * ry)
-        .enumerate()
-        .for_each_init(
-            || (Evaluator::<F32x8>::new(), vec![0.0f32; rx]),
-            |(ev, row), (z, slice)| {
-                for y in 0..ry {
-                    let p0 = bbox.min + (Vec3::new(0.0, y as f32, z as f32) + 0.5) * size;
-                    row_distances(ev, tape, p0, size.x, rx, row);
-                    for (v, d) in slice[y * rx..(y + 1) * rx].iter_mut().zip(row.iter()) {
-                        *v = if ramp > 0.0 {
-                            (0.5 - d / ramp).clamp(0.0, 1.0)
-                        } else if *d < 0.0 {
-                            1.0
-                        } else {
-                            0.0
-                        };
-                    }
-                }
-                slice_done();
-            },
-        );
-    Ok(g)
+    sample_field(tape, res, bbox, limit, slice_done, &|d| {
+        if ramp > 0.0 {
+            (0.5 - d / ramp).clamp(0.0, 1.0)
+        } else if d < 0.0 {
+            1.0
+        } else {
+            0.0
+        }
+    })
 }
 
 /// Samples `tape`'s signed distance (world units, negative inside) at the voxel centres of a
@@ -130,6 +114,19 @@ pub fn sample_distance(
     bbox: WorldBox,
     limit: u64,
     slice_done: &(dyn Fn() + Sync),
+) -> Result<Grid<f32>, VolumeError> {
+    sample_field(tape, res, bbox, limit, slice_done, &|d| d)
+}
+
+/// `value(distance)` at the voxel centres of a `res` grid over `bbox`, z slices in parallel
+/// on the 8-lane evaluator; `slice_done` is called after each slice.
+fn sample_field(
+    tape: &Tape,
+    res: [u32; 3],
+    bbox: WorldBox,
+    limit: u64,
+    slice_done: &(dyn Fn() + Sync),
+    value: &(dyn Fn(f32) -> f32 + Sync),
 ) -> Result<Grid<f32>, VolumeError> {
     let mut g = Grid::<f32>::new(res, bbox, limit)?;
     let [rx, ry, _] = res.map(|r| r as usize);
@@ -143,7 +140,9 @@ pub fn sample_distance(
                 for y in 0..ry {
                     let p0 = bbox.min + (Vec3::new(0.0, y as f32, z as f32) + 0.5) * size;
                     row_distances(ev, tape, p0, size.x, rx, row);
-                    slice[y * rx..(y + 1) * rx].copy_from_slice(&row[..rx]);
+                    for (v, d) in slice[y * rx..(y + 1) * rx].iter_mut().zip(row.iter()) {
+                        *v = value(*d);
+                    }
                 }
                 slice_done();
             },
