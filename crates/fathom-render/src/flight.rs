@@ -58,6 +58,16 @@ pub struct FlightReport {
     pub recompiles: usize,
 }
 
+/// The time of frame `i` of `frames` spread over a path of `duration` seconds: the first at
+/// its start, the last at its end.
+pub fn frame_time(i: usize, frames: usize, duration: f64) -> f64 {
+    if frames > 1 {
+        duration * i as f64 / (frames - 1) as f64
+    } else {
+        0.0
+    }
+}
+
 impl FlightRender {
     pub fn validate(&self) -> Result<(), FlightRenderError> {
         if self.frames == 0 || self.frames > MAX_FRAMES {
@@ -69,11 +79,7 @@ impl FlightRender {
 
     /// The time of frame `i` on a path of `duration` seconds.
     pub fn time(&self, i: usize, duration: f64) -> f64 {
-        if self.frames > 1 {
-            duration * i as f64 / (self.frames - 1) as f64
-        } else {
-            0.0
-        }
+        frame_time(i, self.frames, duration)
     }
 
     /// Renders every frame of `flight` over `base` (the scene the path belongs to), calling

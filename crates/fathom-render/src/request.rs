@@ -119,18 +119,6 @@ impl Default for VolumeSettings {
     }
 }
 
-impl Eq for VolumeSettings {}
-
-impl std::hash::Hash for VolumeSettings {
-    fn hash<H: std::hash::Hasher>(&self, h: &mut H) {
-        self.grid.hash(h);
-        self.spp.hash(h);
-        for f in [self.smooth, self.density_scale, self.albedo, self.g] {
-            f.to_bits().hash(h);
-        }
-    }
-}
-
 /// What to render: one frame, or one region of it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]

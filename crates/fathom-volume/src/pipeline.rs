@@ -163,12 +163,7 @@ pub fn build(source: &Source, limit: u64, progress: Progress) -> Result<Built, V
             bbox,
             smooth,
         } => {
-            check_res("grid", *res)?;
-            let tape = Tape::compile(scene).map_err(|e| VolumeError::Invalid(e.to_string()))?;
-            let bbox = match bbox {
-                Some(b) => *b,
-                None => fractal::fit_box(&tape)?,
-            };
+            let (tape, bbox) = scene_grid(scene, *res, *bbox)?;
             let done = std::sync::atomic::AtomicU64::new(0);
             let density = fractal::sample(&tape, [*res; 3], bbox, *smooth, limit, &|| {
                 let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
@@ -223,6 +218,46 @@ pub fn build(source: &Source, limit: u64, progress: Progress) -> Result<Built, V
             })
         }
     }
+}
+
+/// The compiled scene and the box its grid spans (given, or fitted to the scene).
+fn scene_grid(
+    scene: &Scene,
+    res: u32,
+    bbox: Option<WorldBox>,
+) -> Result<(Tape, WorldBox), VolumeError> {
+    check_res("grid", res)?;
+    let tape = Tape::compile(scene).map_err(|e| VolumeError::Invalid(e.to_string()))?;
+    let bbox = match bbox {
+        Some(b) => b,
+        None => fractal::fit_box(&tape)?,
+    };
+    Ok((tape, bbox))
+}
+
+/// The signed distance of a scene source ([`Source::Fractal`]) at the voxel centres of its
+/// grid (world units, negative inside; see [`fractal::sample_distance`]), for export: not a
+/// density to render.
+pub fn distance_grid(
+    source: &Source,
+    limit: u64,
+    progress: Progress,
+) -> Result<DensityGrid, VolumeError> {
+    let Source::Fractal {
+        scene, res, bbox, ..
+    } = source
+    else {
+        return Err(VolumeError::Invalid(
+            "a distance grid samples a scene (--scene or --preset), not a simulation or a file"
+                .into(),
+        ));
+    };
+    let (tape, bbox) = scene_grid(scene, *res, *bbox)?;
+    let done = std::sync::atomic::AtomicU64::new(0);
+    fractal::sample_distance(&tape, [*res; 3], bbox, limit, &|| {
+        let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress("distance", d, *res as u64);
+    })
 }
 
 /// Whether `path` names a raw grid (extension `.raw`) rather than a `.vol`.

@@ -170,11 +170,7 @@ fn run_sequence(
         .map_err(|e| format!("path `{name}`: {e}"))?;
     let start = std::time::Instant::now();
     for i in 0..frames {
-        let t = if frames > 1 {
-            flight.duration() * i as f64 / (frames - 1) as f64
-        } else {
-            0.0
-        };
+        let t = fathom_render::flight::frame_time(i, frames, flight.duration());
         let mut s = scene.clone();
         flight.apply(t, &mut s);
         let file = output::sequence_path(&pattern, i as u64)?;

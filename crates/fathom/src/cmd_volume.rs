@@ -414,14 +414,11 @@ pub fn run(a: VolumeArgs) -> Result<(), String> {
 
 /// `--export-field distance`: the scene's signed distance sampled into a `.vol` grid.
 fn export_distance(a: &VolumeArgs, src: Source, limit: u64) -> Result<(), String> {
-    let Source::Fractal {
-        scene, res, bbox, ..
-    } = src
-    else {
+    if !matches!(src, Source::Fractal { .. }) {
         return Err(
             "--export-field distance samples a scene: give --scene FILE or --preset NAME".into(),
         );
-    };
+    }
     let Some(path) = &a.export else {
         return Err("--export-field distance needs --export FILE.vol".into());
     };
@@ -441,33 +438,34 @@ fn export_distance(a: &VolumeArgs, src: Source, limit: u64) -> Result<(), String
                 .into(),
         );
     }
-    let tape = fathom_core::Tape::compile(&scene).map_err(|e| e.to_string())?;
-    let bbox = match bbox {
-        Some(b) => b,
-        None => fathom_volume::fractal::fit_box(&tape).map_err(|e| e.to_string())?,
-    };
     std::fs::File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads.unwrap_or(0))
         .build()
         .map_err(|e| e.to_string())?;
-    let pb = bar(a.quiet, res as u64, "distance");
-    let done = std::sync::atomic::AtomicU64::new(0);
+    let pb = std::sync::Mutex::new(None::<ProgressBar>);
     let grid = pool
         .install(|| {
-            fathom_volume::fractal::sample_distance(&tape, [res; 3], bbox, limit, &|| {
-                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                pb.set_position(d);
+            pipeline::distance_grid(&src, limit, &|what, done, total| {
+                let mut g = pb.lock().expect("progress lock");
+                g.get_or_insert_with(|| bar(a.quiet, total, what))
+                    .set_position(done);
             })
         })
         .map_err(|e| e.to_string())?;
-    pb.finish_and_clear();
+    if let Some(b) = pb.lock().expect("progress lock").take() {
+        b.finish_and_clear();
+    }
     fathom_volume::vol_file::write(path, &grid).map_err(|e| e.to_string())?;
     if !a.quiet {
+        let (r, b) = (grid.res(), grid.bbox);
         eprintln!(
-            "volume: wrote the signed distance on a {res}^3 grid over {:?} .. {:?} to {}",
-            bbox.min.to_array(),
-            bbox.max.to_array(),
+            "volume: wrote the signed distance on a {}x{}x{} grid over {:?} .. {:?} to {}",
+            r[0],
+            r[1],
+            r[2],
+            b.min.to_array(),
+            b.max.to_array(),
             path.display()
         );
     }
