@@ -1,6 +1,6 @@
 //! The CPU tape interpreter, generic over [`Real`]: `f64` for the exact scalar path (deep zoom,
-//! reference), [`F32x8`] for eight points at once (throughput). Also the gradient (normal)
-//! helper.
+//! reference), [`F32x8`] for eight points at once (throughput), [`crate::dd::Dd`] (double-double)
+//! past f64 precision. Also the gradient (normal) helper.
 
 use crate::combine::Combine;
 use crate::fractals::Fractal;
@@ -132,6 +132,12 @@ impl Tape {
     /// loops).
     pub fn eval_f64(&self, p: [f64; 3]) -> Value<f64> {
         Evaluator::<f64>::new().eval(self, V3::new(p[0], p[1], p[2]))
+    }
+
+    /// Evaluates one point in double-double (~1e-32 relative; see [`crate::dd`] for which
+    /// functions are only f64-accurate). Allocates an evaluator; use [`Evaluator`] in loops.
+    pub fn eval_dd(&self, p: V3<crate::dd::Dd>) -> Value<crate::dd::Dd> {
+        Evaluator::<crate::dd::Dd>::new().eval(self, p)
     }
 
     /// Evaluates eight points on the f32 packet path.

@@ -8,6 +8,7 @@
 //!   [`binding`]: parameters driven by LFOs or OSC; [`param_path`]: a number of a scene by path;
 //! - [`tape`]: the flat program a scene compiles to (see `docs/tape.md`);
 //! - [`eval`]: the CPU interpreter (f64 scalar and f32x8 packet paths) and normals;
+//! - [`dd`]: double-double numbers ([`Dd`], ~1e-32 relative) for zooms past f64 precision;
 //! - [`reference`]: a direct tree walk that defines what the tape must compute;
 //! - [`shared`]: constants the CPU renderers and the WGSL program share, defined once.
 
@@ -16,6 +17,7 @@ pub mod call_serde;
 pub mod camera;
 pub mod camera_path;
 pub mod combine;
+pub mod dd;
 pub mod docgen;
 pub mod eval;
 pub mod flight;
@@ -43,6 +45,7 @@ pub mod value;
 pub mod vec3;
 
 pub use camera::{Camera, CameraFrame, Projection};
+pub use dd::Dd;
 pub use eval::Evaluator;
 pub use real::{F32x8, Real};
 pub use scene::{Call, Material, Node, Scene};

@@ -1,8 +1,9 @@
 //! The scalar abstraction every distance function is written against.
 //!
-//! Each primitive, operator and fractal is written once, generic over [`Real`]. Two types
-//! implement it: `f64` (the exact scalar path used for deep zoom and as the reference) and
-//! [`F32x8`] (eight `f32` lanes evaluated together by AVX2, the throughput path). Control flow
+//! Each primitive, operator and fractal is written once, generic over [`Real`]. Three types
+//! implement it: `f64` (the exact scalar path used as the reference), [`F32x8`] (eight `f32`
+//! lanes evaluated together by AVX2, the throughput path) and [`crate::dd::Dd`] (double-double,
+//! one lane, for zooms past f64 precision). Control flow
 //! that depends on a value (a fold, a bailout) is written with masks and [`Real::select`], so the
 //! same source is branch-free on the packet path and an ordinary `if` on the scalar path.
 
