@@ -34,6 +34,11 @@ pub enum RenderError {
     Cancelled,
     #[error("cannot start {threads} worker threads: {message}")]
     Threads { threads: usize, message: String },
+    /// A deep eye's trailing part is NaN or infinite, or its view scale is not positive.
+    #[error(
+        "a deep eye needs a finite trailing part and a positive scale; got ({x}, {y}, {z}) and scale {scale}"
+    )]
+    DeepEye { x: f64, y: f64, z: f64, scale: f64 },
 }
 
 impl From<TraceError> for RenderError {

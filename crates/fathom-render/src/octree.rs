@@ -101,10 +101,11 @@ impl OctreeBackend {
         &mut self,
         scene: &Scene,
         camera: &Camera,
+        deep: &fathom_svo::DeepEye,
         req: &RenderRequest,
         want_frame: bool,
     ) -> (Option<Frame>, FrameStats) {
-        let (img, st) = self.explorer.step(camera);
+        let (img, st) = self.explorer.step_deep(camera, deep);
         let frame = want_frame.then(|| finish(&img, scene, camera, req));
         (frame, st)
     }

@@ -297,12 +297,33 @@ impl Session {
         req: &RenderRequest,
         want_frame: bool,
     ) -> Result<(Option<Frame>, FrameStats), RenderError> {
+        self.step_octree_deep(camera, &fathom_svo::DeepEye::of(camera), req, want_frame)
+    }
+
+    /// [`Session::step_octree`] for a zoom past f64: the eye is `camera.eye + deep.eye_lo` (a
+    /// double-double position), the view's scale `deep.scale` (see `fathom_svo::DeepEye`).
+    pub fn step_octree_deep(
+        &mut self,
+        camera: &Camera,
+        deep: &fathom_svo::DeepEye,
+        req: &RenderRequest,
+        want_frame: bool,
+    ) -> Result<(Option<Frame>, FrameStats), RenderError> {
         req.validate()?;
         camera.validate()?;
+        let lo = deep.eye_lo;
+        if !(lo.is_finite() && deep.scale.is_finite() && deep.scale > 0.0) {
+            return Err(RenderError::DeepEye {
+                x: lo.x,
+                y: lo.y,
+                z: lo.z,
+                scale: deep.scale,
+            });
+        }
         let scene = scene_for(&self.scene, req);
         let key = self.shading_generation;
         let ob = OctreeBackend::get(&mut self.octree, &scene, key, req, &mut self.counters)?;
-        Ok(ob.step(&scene, camera, req, want_frame))
+        Ok(ob.step(&scene, camera, deep, req, want_frame))
     }
 
     /// The octree explorer, if one is built.

@@ -1,6 +1,7 @@
 //! A zoom (or tour) with the octree: the frame loop of `fathom zoom` and `fathom bench svo`.
-//! Each frame takes its camera from the path, checks the precision guard (a zoom stops
-//! cleanly where f64 root coordinates run out, and says so), steps the session's octree, and
+//! Each frame takes its camera from the path (with the eye in double-double past f64:
+//! [`ZoomPath::deep_camera`]), checks the precision guard (a zoom stops cleanly where the
+//! octree's arithmetic runs out, and says so), steps the session's octree, and
 //! hands the finished frame (when frames are wanted) and its statistics to the caller. Every
 //! `compare_every`-th frame is also rendered by the sphere tracer at the same camera and the
 //! two compared ([`crate::compare`]): SSIM on luminance, silhouette IoU, colour error, and the
@@ -14,9 +15,10 @@ use fathom_core::Camera;
 use fathom_core::Scene;
 use fathom_core::Tape;
 use fathom_core::camera_path::{CameraPath, ExactCube, PathPreset, surface_point, view_target};
+use fathom_core::dd::Dd;
 use fathom_core::frame::Frame;
 use fathom_svo::stats::Summary;
-use fathom_svo::{FrameStats, Traversal};
+use fathom_svo::{DeepEye, FrameStats, Traversal};
 use glam::DVec3;
 use serde::Serialize;
 
@@ -261,6 +263,51 @@ impl ZoomPath {
     pub fn camera(&self, i: usize, frames: usize, depth: f64) -> Camera {
         self.path.camera(i, frames, depth, self.fov)
     }
+
+    /// The camera of frame `i` with the eye to double-double precision, for the octree. Once
+    /// the eye is closer to its target than a millionth of the target's coordinates, the f64
+    /// camera's look direction (target minus a rounded eye) is off by more than 1e-10 rad and
+    /// past zoom ~1e16 the two points are the same f64 value; the camera then looks along the
+    /// zoom's direction at a point one unit away, and [`DeepEye`] carries the eye's trailing
+    /// part and the true distance to the target.
+    pub fn deep_camera(&self, i: usize, frames: usize, depth: f64) -> (Camera, DeepEye) {
+        let cam = self.camera(i, frames, depth);
+        let CameraPath::Zoom { target, dir, start } = self.path else {
+            let deep = DeepEye::of(&cam);
+            return (cam, deep);
+        };
+        let f = if frames > 1 {
+            i as f64 / (frames - 1) as f64
+        } else {
+            0.0
+        };
+        let dist = start * depth.powf(-f);
+        if dist > 1e-6 * target.abs().max_element().max(1.0) {
+            return (
+                cam,
+                DeepEye {
+                    eye_lo: DVec3::ZERO,
+                    scale: dist,
+                },
+            );
+        }
+        let eye: [Dd; 3] =
+            std::array::from_fn(|a| Dd::from(target[a]) + Dd::from(dir[a]) * Dd::from(dist));
+        let hi = DVec3::new(eye[0].hi, eye[1].hi, eye[2].hi);
+        let lo = DVec3::new(eye[0].lo, eye[1].lo, eye[2].lo);
+        let cam = Camera {
+            eye: hi,
+            target: hi - dir,
+            ..cam
+        };
+        (
+            cam,
+            DeepEye {
+                eye_lo: lo,
+                scale: dist,
+            },
+        )
+    }
 }
 
 /// The zoom target along the ray from `eye` along unit `dir`: the surface point bracketed to
@@ -361,11 +408,11 @@ impl Zoom {
         let mut zooms = Vec::with_capacity(self.frames);
         let mut stopped = None;
         for i in 0..self.frames {
-            let cam = preset.camera(i, self.frames, self.depth);
+            let (cam, deep) = preset.deep_camera(i, self.frames, self.depth);
             let z = preset.path.zoom_at(i, self.frames, self.depth);
-            if let (Some(target), Some(ex)) = (preset.path.target(), session.octree()) {
+            if let (Some(_), Some(ex)) = (preset.path.target(), session.octree()) {
                 let pa = cam.frame().pixel_angle(ex.cfg.height);
-                let dist = (cam.eye - target).length();
+                let dist = deep.scale;
                 if let Err(e) = fathom_svo::precision::precision_check(
                     dist,
                     ex.tree.root_size,
@@ -379,7 +426,8 @@ impl Zoom {
             }
             let compare_now =
                 self.compare_every > 0 && (i % self.compare_every == 0 || i + 1 == self.frames);
-            let (frame, st) = session.step_octree(&cam, &req, want_frames || compare_now)?;
+            let (frame, st) =
+                session.step_octree_deep(&cam, &deep, &req, want_frames || compare_now)?;
             if let (true, Some(r), Some(f)) = (compare_now, reference.as_mut(), frame.as_ref()) {
                 let t0 = std::time::Instant::now();
                 let traced = r.frame(&cam)?;

@@ -3,7 +3,7 @@
 //! unification, and by the stress test every frame.
 
 use crate::node::{EMPTY, NONE};
-use crate::octree::{BoxU, Octree};
+use crate::octree::{Cell, Octree};
 
 /// Checks the tree; returns the first problem found.
 ///
@@ -14,8 +14,8 @@ use crate::octree::{BoxU, Octree};
 /// empty leaf children (recombination); the node count matches the reachable nodes.
 pub fn check(tree: &Octree) -> Result<(), String> {
     let nodes = &tree.nodes;
-    let mut boxes: Vec<Option<BoxU>> = vec![None; nodes.len()];
-    let mut stack = vec![(0u32, BoxU::ROOT)];
+    let mut boxes: Vec<Option<Cell>> = vec![None; nodes.len()];
+    let mut stack = vec![(0u32, Cell::ROOT)];
     let mut live = 0usize;
     let mut bricks = 0usize;
     while let Some((id, b)) = stack.pop() {
@@ -87,7 +87,7 @@ pub fn check(tree: &Octree) -> Result<(), String> {
         for f in 0..6 {
             let l = nodes[id].link(f);
             let shifted = b.across(f);
-            let outside = !(0..3).all(|a| shifted.min[a] >= 0.0 && shifted.min[a] < 1.0);
+            let outside = !shifted.in_root();
             if l == NONE {
                 if !outside {
                     return Err(format!(

@@ -11,7 +11,7 @@
 //! free list.
 
 use crate::node::{EMPTY, FREE, NONE, VISITED, opposite};
-use crate::octree::{BoxU, Octree};
+use crate::octree::{Cell, Octree};
 
 /// Marks the bricks enclosing node `id` as visited (rays call this; atomics, no locks). The
 /// walk stops at the first brick already marked: a marked brick always has every enclosing
@@ -37,7 +37,7 @@ pub fn mark_visited(tree: &Octree, id: u32) {
 
 /// Frees every descendant of `r` (box `rb`), repairing links into them so they point at `r`;
 /// `r` becomes a leaf (its flags are left for the caller to set).
-pub fn free_children(tree: &mut Octree, r: u32, rb: BoxU) {
+pub fn free_children(tree: &mut Octree, r: u32, rb: Cell) {
     let first = tree.nodes[r as usize].children;
     if first == NONE {
         return;
@@ -82,15 +82,17 @@ pub fn free_children(tree: &mut Octree, r: u32, rb: BoxU) {
             }
             for o in 0..8 {
                 let cb = yb.child(o);
-                let cd = cb.dim();
+                // Compared as lattice coordinates at the finer of the two depths (exact).
+                let d = cb.depth.max(a.depth);
                 let touches = if g & 1 == 1 {
-                    cb.min[axis] == a.min[axis]
+                    cb.span_at(axis, d).0 == a.span_at(axis, d).0
                 } else {
-                    cb.min[axis] + cd == rb.min[axis]
+                    cb.span_at(axis, d).1 == rb.span_at(axis, d).0
                 };
-                let overlaps = (0..3)
-                    .filter(|&b| b != axis)
-                    .all(|b| cb.min[b] < a.min[b] + a.dim() && cb.min[b] + cd > a.min[b]);
+                let overlaps = (0..3).filter(|&b| b != axis).all(|b| {
+                    let (c, s) = (cb.span_at(b, d), a.span_at(b, d));
+                    c.0 < s.1 && c.1 > s.0
+                });
                 if touches && overlaps {
                     st.push((n.children + o as u32, cb));
                 }
@@ -108,7 +110,7 @@ pub fn free_children(tree: &mut Octree, r: u32, rb: BoxU) {
 /// flags of the bricks kept. Returns how many bricks were unified.
 pub fn unify(tree: &mut Octree, keep_levels: u8) -> usize {
     let mut unified = 0;
-    let mut stack = vec![(0u32, BoxU::ROOT)];
+    let mut stack = vec![(0u32, Cell::ROOT)];
     while let Some((x, xb)) = stack.pop() {
         let (first, flags) = {
             let n = &tree.nodes[x as usize];

@@ -15,12 +15,14 @@
 
 use crate::error::OctreeError;
 use crate::evict::unify;
-use crate::generate::{Children, Outcome, Shader, View, apply, eval_children, init_root};
+use crate::generate::{
+    Children, Origin, Outcome, Probe, Shader, View, apply, eval_children, init_root,
+};
 use crate::node::{NONE, REQUESTED, pack_rgb};
-use crate::octree::{BoxU, Octree, dim_at};
+use crate::octree::{Anchor, BoxU, Octree, dim_at};
 use crate::root::RootSpec;
 use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
-use fathom_core::eval::Evaluator;
+use fathom_core::dd::Dd;
 use fathom_core::scene::Scene;
 use fathom_core::{Camera, CameraFrame};
 use glam::DVec3;
@@ -213,6 +215,9 @@ pub struct FrameStats {
     pub resident_bytes: u64,
     /// Depth of the skip node (-1 when the eye is outside the root).
     pub skip_depth: i32,
+    /// Depth of the anchor box coordinates are measured from (0: root units, f64 evaluation;
+    /// deeper: double-double evaluation).
+    pub anchor_depth: u8,
     /// The largest voxel visible in this frame, in pixels ([`SvoImage::largest_voxel_px`]).
     pub largest_voxel_px: f64,
 }
@@ -224,6 +229,29 @@ pub fn resident_bytes() -> u64 {
         .and_then(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
         .map(|pages| pages * 4096)
         .unwrap_or(0)
+}
+
+/// What a frame past f64 needs beyond its [`Camera`]: the eye is `cam.eye + eye_lo` (a
+/// double-double position), and `scale` is the distance to what the view looks at (world
+/// units; it places the anchor and sets the reach of ambient occlusion). Past zoom ~1e16 the
+/// eye and its target are the same f64 point, so a deep camera looks along the zoom's
+/// direction at a target one unit away and carries the true distance here.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeepEye {
+    /// Trailing part of the eye position (below an ulp of `cam.eye`).
+    pub eye_lo: DVec3,
+    /// Distance from the eye to what it looks at, world units.
+    pub scale: f64,
+}
+
+impl DeepEye {
+    /// An ordinary camera: no trailing part, the distance to its target.
+    pub fn of(cam: &Camera) -> DeepEye {
+        DeepEye {
+            eye_lo: DVec3::ZERO,
+            scale: (cam.target - cam.eye).length(),
+        }
+    }
 }
 
 /// The scale-adaptive SVO explorer.
@@ -255,6 +283,12 @@ impl Explorer {
             })?;
         let (root_min, root_size) = pool.install(|| cfg.root.resolve(&shader));
         let mut tree = Octree::new(root_min, root_size, cfg.brick_period, max_nodes);
+        let mut shader = shader;
+        shader.origin = Origin {
+            hi: root_min,
+            lo: DVec3::ZERO,
+            deep: false,
+        };
         init_root(&mut tree, &shader);
         Ok(Explorer {
             tree,
@@ -272,11 +306,11 @@ impl Explorer {
         self.skip
     }
 
-    /// Brings the skip node up to date for an eye at `o` (root units): stays if still valid,
+    /// Brings the skip node up to date for an eye at `o` (local units): stays if still valid,
     /// else follows the link through the face the eye crossed, else descends from the root.
     pub fn update_skip(&mut self, o: [f64; 3]) {
         let tree = &self.tree;
-        if !BoxU::ROOT.contains(o) {
+        if !tree.root_box().contains(o) {
             self.skip = None;
             return;
         }
@@ -308,7 +342,9 @@ impl Explorer {
             }
             let nb = tree.nodes[id as usize].link(best.1);
             if nb != NONE {
-                let nbb = b.across(best.1).snapped(tree.nodes[nb as usize].depth);
+                let nbb = tree
+                    .anchor
+                    .snap(&b.across(best.1), tree.nodes[nb as usize].depth);
                 if nbb.contains(o) {
                     self.skip = Some(descend(nb, nbb));
                     return;
@@ -323,10 +359,10 @@ impl Explorer {
     /// would be visited, and unification would unload the whole view. Subdivide the eye's
     /// leaf (synchronously, it is one leaf per level) until it is empty or at the depth limit.
     fn clear_eye(&mut self, o: [f64; 3]) {
-        let mut ev = Evaluator::<f64>::new();
+        let mut ev = Probe::new();
         while let Some((id, b)) = self.skip {
             let n = &self.tree.nodes[id as usize];
-            if n.is_empty() || !n.is_leaf() || b.depth >= crate::octree::MAX_DEPTH {
+            if n.is_empty() || !n.is_leaf() || b.depth >= self.tree.depth_limit() {
                 return;
             }
             let r = eval_children(&self.shader, &self.tree, &mut ev, id, b);
@@ -338,15 +374,86 @@ impl Explorer {
         }
     }
 
+    /// The eye in root units as double-double, from its world position `eye + eye_lo`.
+    fn eye_root_units(&self, eye: DVec3, eye_lo: DVec3) -> [Dd; 3] {
+        let (m, s) = (self.tree.root_min, Dd::from(self.tree.root_size));
+        [0, 1, 2].map(|a| (Dd::new(eye[a], eye_lo[a]) - Dd::from(m[a])) / s)
+    }
+
+    /// Moves the anchor (the lattice point box coordinates are measured from) with the eye:
+    /// [`ANCHOR_LEVELS_ABOVE`] levels above the depth whose cells are the size of the eye's
+    /// distance to its target, so every box a ray meets near the eye is a small exact dyadic
+    /// (see [`crate::octree`]). It stays where it is while that depth changes by less than 4
+    /// levels and the eye stays within its cell's neighbours; at depth 0 it is the root's
+    /// corner (root units, the f64 path of shallow frames). Returns true when it moved.
+    fn place_anchor(&mut self, eye_u: &[Dd; 3], scale: f64) -> bool {
+        let depth_e = (self.tree.root_size / scale).log2().floor();
+        let want = (depth_e - ANCHOR_LEVELS_ABOVE as f64)
+            .clamp(0.0, crate::octree::MAX_ANCHOR_DEPTH as f64) as u8;
+        let cur = &self.tree.anchor;
+        let near = {
+            let o = cur.origin();
+            let unit = dim_at(cur.depth);
+            (0..3).all(|a| {
+                let local = ((eye_u[a] - Dd::new(o[a].0, o[a].1)).hi) / unit;
+                (-1.0..2.0).contains(&local)
+            })
+        };
+        if (want == 0 && cur.depth == 0) || (want.abs_diff(cur.depth) < 4 && near && cur.depth > 0)
+        {
+            return false;
+        }
+        self.tree.anchor = if want == 0 {
+            Anchor::default()
+        } else {
+            Anchor::at(want, eye_u.map(|x| x.hi), eye_u.map(|x| x.lo))
+        };
+        self.skip = None;
+        true
+    }
+
     /// Phase 1: renders the tree as it is (read-only apart from atomics). Returns the image,
     /// the subdivision requests and (rays, hits, node steps).
     pub fn render(&mut self, cam: &Camera) -> (SvoImage, Vec<Request>, [u64; 3]) {
+        self.render_deep(cam, &DeepEye::of(cam))
+    }
+
+    /// [`Explorer::render`] for an eye known more precisely than f64 (see [`DeepEye`]).
+    pub fn render_deep(
+        &mut self,
+        cam: &Camera,
+        deep: &DeepEye,
+    ) -> (SvoImage, Vec<Request>, [u64; 3]) {
         let frame = cam.frame();
-        self.shader.view = View {
-            eye: cam.eye,
-            scale: (cam.target - cam.eye).length().max(1e-300),
+        let scale = deep.scale.max(1e-300);
+        let eye_u = self.eye_root_units(cam.eye, deep.eye_lo);
+        self.place_anchor(&eye_u, scale);
+        let origin = self.tree.anchor.origin();
+        // The eye relative to the anchor (root units), and the anchor's world position.
+        let o: [f64; 3] =
+            std::array::from_fn(|a| (eye_u[a] - Dd::new(origin[a].0, origin[a].1)).hi);
+        let deep = self.tree.anchor.depth > 0;
+        let world: [Dd; 3] = std::array::from_fn(|a| {
+            Dd::from(self.tree.root_min[a])
+                + Dd::new(origin[a].0, origin[a].1) * Dd::from(self.tree.root_size)
+        });
+        self.shader.origin = if deep {
+            Origin {
+                hi: DVec3::new(world[0].hi, world[1].hi, world[2].hi),
+                lo: DVec3::new(world[0].lo, world[1].lo, world[2].lo),
+                deep: true,
+            }
+        } else {
+            Origin {
+                hi: self.tree.root_min,
+                lo: DVec3::ZERO,
+                deep: false,
+            }
         };
-        let o = self.tree.to_u(cam.eye);
+        self.shader.view = View {
+            eye: self.tree.local_world(o),
+            scale,
+        };
         self.update_skip(o);
         self.clear_eye(o);
         let (w, h) = (self.cfg.width, self.cfg.height);
@@ -436,9 +543,7 @@ impl Explorer {
             let results: Vec<Children> = self.pool.install(|| {
                 chunk
                     .par_iter()
-                    .map_init(Evaluator::<f64>::new, |ev, r| {
-                        eval_children(sh, tree, ev, r.id, r.b)
-                    })
+                    .map_init(Probe::new, |ev, r| eval_children(sh, tree, ev, r.id, r.b))
                     .collect()
             });
             for r in &results {
@@ -485,8 +590,13 @@ impl Explorer {
     /// Runs one whole frame: render, subdivide, maybe unify. Returns the image (as rendered:
     /// the tree changes only after it is complete) and the stats.
     pub fn step(&mut self, cam: &Camera) -> (SvoImage, FrameStats) {
+        self.step_deep(cam, &DeepEye::of(cam))
+    }
+
+    /// [`Explorer::step`] with an eye known more precisely than f64 (see [`DeepEye`]).
+    pub fn step_deep(&mut self, cam: &Camera, deep: &DeepEye) -> (SvoImage, FrameStats) {
         let t0 = Instant::now();
-        let (img, reqs, c) = self.render(cam);
+        let (img, reqs, c) = self.render_deep(cam, deep);
         let render_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = Instant::now();
         let nreq = reqs.len() as u64;
@@ -522,6 +632,7 @@ impl Explorer {
             arena_bytes: self.tree.arena_bytes() as u64,
             resident_bytes: resident_bytes(),
             skip_depth: self.skip.map(|s| s.1.depth as i32).unwrap_or(-1),
+            anchor_depth: self.tree.anchor.depth,
             largest_voxel_px: img.largest_voxel_px,
         };
         self.frame += 1;
@@ -554,6 +665,13 @@ pub fn order_requests(reqs: &mut [Request]) {
             .then(a.id.cmp(&b.id))
     });
 }
+
+/// How many levels above the eye's scale the anchor sits (see `Explorer::place_anchor`): the
+/// voxels the eye needs lie about 10 levels below that scale at 640x480, so boxes near the eye
+/// reach about 46 levels below the anchor, within its exact span of 48
+/// ([`crate::octree::ANCHOR_SPAN`]). Until the eye's scale is 37 levels below the root the
+/// anchor is the root's corner and frames are evaluated in f64 exactly as before.
+pub const ANCHOR_LEVELS_ABOVE: u8 = 36;
 
 /// Voxels seen from closer than this many pixel footprints' worth (the eye inside a full
 /// voxel, `t` = 0) count as this many pixels: keeps the figure finite for JSON.

@@ -21,6 +21,7 @@
 use crate::evict::{free_children, mark_visited};
 use crate::node::{EMPTY, NONE, REQUESTED, VISITED, pack_rgb};
 use crate::octree::{BoxU, Octree};
+use fathom_core::dd::Dd;
 use fathom_core::eval::Evaluator;
 use fathom_core::registry::{Family, Quality};
 use fathom_core::scene::Scene;
@@ -32,15 +33,56 @@ use glam::DVec3;
 /// Default relative margin of the full test.
 pub const DEFAULT_MARGIN: f64 = 0.01;
 
-/// Where the voxels being coloured are seen from: the eye (world) and the view's scale (the
-/// distance from the eye to the camera's target, which sets the reach of ambient occlusion as
-/// in the sphere tracer). Set by the explorer before each frame's subdivision.
+/// Where the voxels being coloured are seen from: the eye (world units relative to the
+/// shader's [`Origin`]) and the view's scale (the distance from the eye to the camera's target,
+/// which sets the reach of ambient occlusion as in the sphere tracer). Set by the explorer
+/// before each frame's subdivision.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
-    /// Eye position, world units.
+    /// Eye position, world units relative to the origin.
     pub eye: DVec3,
     /// Distance from the eye to the camera's target, world units.
     pub scale: f64,
+}
+
+/// The world point the shader's positions are measured from: the octree anchor's world
+/// position, `hi + lo` (double-double). While the anchor is the root's corner (`deep` false)
+/// the scene is evaluated in f64 at `hi + q`, exactly as in absolute coordinates; deeper, at
+/// `hi + lo + q` in double-double, so voxels far below an f64 ulp of a world coordinate are
+/// told apart (the cost of that is measured by `fathom bench eval`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Origin {
+    /// Leading part.
+    pub hi: DVec3,
+    /// Trailing part (below an ulp of `hi`).
+    pub lo: DVec3,
+    /// Evaluate in double-double.
+    pub deep: bool,
+}
+
+/// The evaluators one worker needs: f64 for shallow frames, double-double for deep ones.
+#[derive(Default)]
+pub struct Probe {
+    f64: Evaluator<f64>,
+    dd: Evaluator<Dd>,
+}
+
+impl Probe {
+    /// Fresh evaluators.
+    pub fn new() -> Probe {
+        Probe::default()
+    }
+}
+
+/// A double-double value rounded to f64 (what shading and the full test use).
+fn to_f64(v: fathom_core::Value<Dd>) -> fathom_core::Value<f64> {
+    fathom_core::Value {
+        d: v.d.hi,
+        id: v.id.hi,
+        id2: v.id2.hi,
+        blend: v.blend.hi,
+        trap: v.trap.hi,
+    }
 }
 
 /// Everything needed to decide and colour voxels: the tape plus shading constants.
@@ -61,6 +103,8 @@ pub struct Shader {
     pub corner_test: bool,
     /// The view the voxels being coloured now are seen from.
     pub view: View,
+    /// What positions given to the shader are relative to.
+    pub origin: Origin,
 }
 
 /// True when every shape, operator and combination of `scene` declares an exact distance or a
@@ -103,19 +147,49 @@ impl Shader {
                 eye: cam.eye,
                 scale: (cam.target - cam.eye).length().max(1e-300),
             },
+            origin: Origin::default(),
         })
     }
 
-    /// The full test at world centre `c` of a voxel with world half-diagonal `hd`; returns the
-    /// evaluated value when full.
+    /// The scene's value at `q` (world units relative to [`Shader::origin`]).
     #[inline]
-    pub fn full(
-        &self,
-        ev: &mut Evaluator<f64>,
-        c: DVec3,
-        hd: f64,
-    ) -> Option<fathom_core::Value<f64>> {
-        let v = ev.eval(&self.tape, V3::new(c.x, c.y, c.z));
+    pub fn eval(&self, pr: &mut Probe, q: DVec3) -> fathom_core::Value<f64> {
+        let o = &self.origin;
+        if o.deep {
+            let p = V3::new(
+                Dd::new(o.hi.x, o.lo.x) + Dd::from(q.x),
+                Dd::new(o.hi.y, o.lo.y) + Dd::from(q.y),
+                Dd::new(o.hi.z, o.lo.z) + Dd::from(q.z),
+            );
+            to_f64(pr.dd.eval(&self.tape, p))
+        } else {
+            let p = o.hi + q;
+            pr.f64.eval(&self.tape, V3::new(p.x, p.y, p.z))
+        }
+    }
+
+    /// The scene's distance at `q` (relative to the origin).
+    #[inline]
+    pub fn distance(&self, pr: &mut Probe, q: DVec3) -> f64 {
+        let o = &self.origin;
+        if o.deep {
+            let p = V3::new(
+                Dd::new(o.hi.x, o.lo.x) + Dd::from(q.x),
+                Dd::new(o.hi.y, o.lo.y) + Dd::from(q.y),
+                Dd::new(o.hi.z, o.lo.z) + Dd::from(q.z),
+            );
+            pr.dd.distance(&self.tape, p).hi
+        } else {
+            let p = o.hi + q;
+            pr.f64.distance(&self.tape, V3::new(p.x, p.y, p.z))
+        }
+    }
+
+    /// The full test at centre `c` (relative to the origin) of a voxel with world
+    /// half-diagonal `hd`; returns the evaluated value when full.
+    #[inline]
+    pub fn full(&self, ev: &mut Probe, c: DVec3, hd: f64) -> Option<fathom_core::Value<f64>> {
+        let v = self.eval(ev, c);
         if self.full_value(&v, c, hd) {
             Some(v)
         } else {
@@ -126,7 +200,7 @@ impl Shader {
     /// The corner test of estimate scenes: whether any corner of the cube `centre +
     /// [-half, half]^3` is inside (or NaN, never a false negative). Always false for scenes
     /// whose distance is a bound, where the centre test alone is conservative.
-    pub fn corner_inside(&self, ev: &mut Evaluator<f64>, centre: DVec3, half: f64) -> bool {
+    pub fn corner_inside(&self, ev: &mut Probe, centre: DVec3, half: f64) -> bool {
         self.corner_test
             && (0..8).any(|k| {
                 let sign = |bit: i32| if k & bit == 0 { -half } else { half };
@@ -134,18 +208,26 @@ impl Shader {
             })
     }
 
-    /// Whether world point `p` is inside the surface, or its distance is NaN (never a false
-    /// negative): the corner test's question.
+    /// Whether point `p` (relative to the origin) is inside the surface, or its distance is
+    /// NaN (never a false negative): the corner test's question.
     #[inline]
-    pub fn inside(&self, ev: &mut Evaluator<f64>, p: DVec3) -> bool {
-        let d = ev.distance(&self.tape, V3::new(p.x, p.y, p.z));
+    pub fn inside(&self, ev: &mut Probe, p: DVec3) -> bool {
+        let d = self.distance(ev, p);
         d <= 0.0 || d.is_nan()
     }
 
-    /// The full test on an evaluated value `v` at world centre `c` (half-diagonal `hd`).
+    /// The full test on an evaluated value `v` at centre `c` (relative to the origin,
+    /// half-diagonal `hd`). The slack is a few units of the last place of the centre's
+    /// coordinates: f64 ones, or double-double ones (2^-104 of the origin) on deep frames.
     #[inline]
     pub fn full_value(&self, v: &fathom_core::Value<f64>, c: DVec3, hd: f64) -> bool {
-        let slack = 8.0 * f64::EPSILON * c.abs().max_element().max(1.0);
+        let o = &self.origin;
+        let slack = if o.deep {
+            8.0 * f64::EPSILON * c.abs().max_element()
+                + 8.0 * 2f64.powi(-104) * o.hi.abs().max_element().max(1.0)
+        } else {
+            8.0 * f64::EPSILON * (o.hi + c).abs().max_element().max(1.0)
+        };
         // NaN counts as full: never a false negative.
         v.d.is_nan() || v.d < hd * (1.0 + self.margin) + slack
     }
@@ -160,13 +242,7 @@ impl Shader {
     /// once voxels are pixel sized. Shading at the surface rather than the centre keeps
     /// neighbouring voxels of a smooth surface from taking the gradient at different offsets
     /// from it, the grain of a field of pixel-sized cubes.
-    pub fn colour(
-        &self,
-        ev: &mut Evaluator<f64>,
-        c: DVec3,
-        h: f64,
-        v: &fathom_core::Value<f64>,
-    ) -> u32 {
+    pub fn colour(&self, ev: &mut Probe, c: DVec3, h: f64, v: &fathom_core::Value<f64>) -> u32 {
         let h = h.max(1e-300);
         let (p, v) = if self.gradient_shading && v.d.is_finite() {
             self.surface_point(ev, c, h).unwrap_or((c, *v))
@@ -198,14 +274,13 @@ impl Shader {
         if !self.gradient_shading {
             return pack_rgb(base);
         }
-        let n = central_gradient(ev, &self.tape, p, h).normalize_or(DVec3::Y);
+        let n = self.central_gradient(ev, p, h).normalize_or(DVec3::Y);
         // Distance-field ambient occlusion, as the tracer computes it.
         let range = 0.05 * self.view.scale;
         let (mut occ, mut w, mut wsum) = (0.0, 1.0, 0.0);
         for i in 0..AO_SAMPLES {
             let hh = range * (0.1 + 0.9 * i as f64 / (AO_SAMPLES - 1) as f64);
-            let q = p + n * hh;
-            let d = ev.distance(&self.tape, V3::new(q.x, q.y, q.z));
+            let d = self.distance(ev, p + n * hh);
             occ += (1.0 - d / hh).clamp(0.0, 1.0) * w;
             wsum += 0.7f64.powi(i as i32);
             w *= 0.7;
@@ -241,12 +316,12 @@ impl Shader {
     /// wall's.
     fn surface_point(
         &self,
-        ev: &mut Evaluator<f64>,
+        ev: &mut Probe,
         c: DVec3,
         h: f64,
     ) -> Option<(DVec3, fathom_core::Value<f64>)> {
         let hd = h * 3f64.sqrt();
-        let eval = |ev: &mut Evaluator<f64>, p: DVec3| ev.eval(&self.tape, V3::new(p.x, p.y, p.z));
+        let eval = |ev: &mut Probe, p: DVec3| self.eval(ev, p);
         let dir = (c - self.view.eye).normalize_or_zero();
         if dir != DVec3::ZERO {
             let mut t = -hd;
@@ -265,7 +340,7 @@ impl Shader {
                 }
             }
         }
-        let g = central_gradient(ev, &self.tape, c, h);
+        let g = self.central_gradient(ev, c, h);
         let v = eval(ev, c);
         let len = g.length();
         let step = (v.d / len.max(1e-300)).clamp(-hd, hd);
@@ -278,20 +353,21 @@ impl Shader {
     }
 }
 
-/// The distance gradient at `p` by central differences with step `e` (6 evaluations); not
-/// normalised (zero where the field is flat or NaN).
-pub fn central_gradient(ev: &mut Evaluator<f64>, tape: &Tape, p: DVec3, e: f64) -> DVec3 {
-    let mut g = [0.0; 3];
-    for (a, ga) in g.iter_mut().enumerate() {
-        let mut off = DVec3::ZERO;
-        off[a] = e;
-        let (q0, q1) = (p + off, p - off);
-        let d0 = ev.distance(tape, V3::new(q0.x, q0.y, q0.z));
-        let d1 = ev.distance(tape, V3::new(q1.x, q1.y, q1.z));
-        let d = (d0 - d1) / (2.0 * e);
-        *ga = if d.is_finite() { d } else { 0.0 };
+impl Shader {
+    /// The distance gradient at `p` (relative to the origin) by central differences with step
+    /// `e` (6 evaluations); not normalised (zero where the field is flat or NaN).
+    pub fn central_gradient(&self, ev: &mut Probe, p: DVec3, e: f64) -> DVec3 {
+        let mut g = [0.0; 3];
+        for (a, ga) in g.iter_mut().enumerate() {
+            let mut off = DVec3::ZERO;
+            off[a] = e;
+            let d0 = self.distance(ev, p + off);
+            let d1 = self.distance(ev, p - off);
+            let d = (d0 - d1) / (2.0 * e);
+            *ga = if d.is_finite() { d } else { 0.0 };
+        }
+        DVec3::from_array(g)
     }
-    DVec3::from_array(g)
 }
 
 /// The evaluated children of one node: bit `o` of `full` set when child `o` is full.
@@ -308,13 +384,7 @@ pub struct Children {
 }
 
 /// Evaluates the 8 children of the leaf with box `b` (read-only; runs in parallel).
-pub fn eval_children(
-    sh: &Shader,
-    tree: &Octree,
-    ev: &mut Evaluator<f64>,
-    id: u32,
-    b: BoxU,
-) -> Children {
+pub fn eval_children(sh: &Shader, tree: &Octree, ev: &mut Probe, id: u32, b: BoxU) -> Children {
     let mut out = Children {
         id,
         b,
@@ -328,19 +398,15 @@ pub fn eval_children(
     let h = b.dim() * 0.5;
     for o in 0..8 {
         let cb = b.child(o);
-        let c = tree.centre_world(&cb);
-        let v = ev.eval(&sh.tape, V3::new(c.x, c.y, c.z));
+        let c = tree.centre_local(&cb);
+        let v = sh.eval(ev, c);
         let mut full = sh.full_value(&v, c, hd);
         if !full && sh.corner_test {
             full = (0..8).any(|k| {
                 let ijk = [0, 1, 2].map(|a| (o >> a & 1) + (k >> a & 1));
                 *lattice[ijk[0] + 3 * ijk[1] + 9 * ijk[2]].get_or_insert_with(|| {
-                    let u = DVec3::new(
-                        b.min[0] + h * ijk[0] as f64,
-                        b.min[1] + h * ijk[1] as f64,
-                        b.min[2] + h * ijk[2] as f64,
-                    );
-                    sh.inside(ev, tree.root_min + u * tree.root_size)
+                    let u = [0, 1, 2].map(|a| b.min[a] + h * ijk[a] as f64);
+                    sh.inside(ev, tree.local_world(u))
                 })
             });
         }
@@ -426,8 +492,9 @@ pub fn apply(tree: &mut Octree, r: &Children) -> Outcome {
     // adjacent box, as deep as the child (safe here: nothing else runs during link-in).
     // Without this, chains of full leaves subdivided level after level hand their children
     // links many levels too coarse, and every first crossing pays a long descent.
+    let rc = tree.anchor.cell_of(&r.b);
     for o in 0..8u32 {
-        let cb = r.b.child(o as usize);
+        let cb = rc.child(o as usize);
         for a in 0..3 {
             let outer = if o >> a & 1 == 1 { 2 * a + 1 } else { 2 * a };
             let l = parent_links[outer];
@@ -442,7 +509,7 @@ pub fn apply(tree: &mut Octree, r: &Children) -> Outcome {
                 if mn.is_leaf() {
                     break;
                 }
-                let oc = mb.octant_of(target.min);
+                let oc = mb.octant_towards(&target);
                 m = mn.children + oc as u32;
                 mb = mb.child(oc);
             }
@@ -478,7 +545,7 @@ pub fn recombine_up(tree: &mut Octree, mut id: u32) {
         if !(first..first + 8).all(|c| tree.is_empty_leaf(c)) {
             return;
         }
-        let pb = tree.box_of(p);
+        let pb = tree.cell_of(p);
         free_children(tree, p, pb);
         tree.nodes[p as usize].set_flags(EMPTY);
         id = p;
@@ -487,9 +554,9 @@ pub fn recombine_up(tree: &mut Octree, mut id: u32) {
 
 /// Evaluates the root and sets it full (with a colour) or empty.
 pub fn init_root(tree: &mut Octree, sh: &Shader) {
-    let mut ev = Evaluator::new();
-    let b = BoxU::ROOT;
-    let c = tree.centre_world(&b);
+    let mut ev = Probe::new();
+    let b = tree.root_box();
+    let c = tree.centre_local(&b);
     let hd = tree.root_size * 0.5 * 3f64.sqrt();
     let n = &mut tree.nodes[0];
     match sh.full(&mut ev, c, hd) {

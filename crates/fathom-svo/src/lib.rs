@@ -5,7 +5,8 @@
 //! ever sees a half-updated octree. See `docs/svo.md` for the design.
 //!
 //! - [`node`]: the arena node (44 bytes) and its flags;
-//! - [`octree`]: the arena of nodes, free list of child blocks, boxes and counts;
+//! - [`octree`]: the arena of nodes, free list of child blocks, exact lattice cells, boxes
+//!   relative to the anchor near the eye, counts;
 //! - [`root`]: the root cube, fitted to the scene's bounds or given;
 //! - [`generate`]: the conservative full test, subdivision and recombination;
 //! - [`traverse`]: neighbour traversal with skip node and link optimisation, kd-restart;
@@ -13,7 +14,8 @@
 //! - [`check`]: the link-integrity checker;
 //! - [`outline`]: silhouette agreement with a sphere tracer, image similarity;
 //! - [`explorer`]: one frame = render (read-only) -> subdivide -> unify; stats;
-//! - [`precision`]: the guard that stops a zoom at the limit of f64 precision;
+//! - [`precision`]: the guard that stops a zoom where the octree's arithmetic runs out
+//!   (depth 98, zoom ~1e28 at 640x480);
 //! - [`stats`]: summaries of per-frame stats.
 
 // Loops over the three axes index several arrays at once.
@@ -33,9 +35,11 @@ pub mod stats;
 pub mod traverse;
 
 pub use error::OctreeError;
-pub use explorer::{Explorer, ExplorerConfig, FrameStats, SvoImage, Traversal};
+pub use explorer::{DeepEye, Explorer, ExplorerConfig, FrameStats, SvoImage, Traversal};
 pub use octree::Octree;
 pub use root::{MENGER_CUBE, RootSpec};
 
+#[cfg(test)]
+mod deep_tests;
 #[cfg(test)]
 mod tests;

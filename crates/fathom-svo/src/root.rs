@@ -10,8 +10,7 @@
 //! surface (and the solid), padded by up to one cell of the search grid. When an exact
 //! bounding cube is known (the Menger sponge), [`RootSpec::Cube`] gives it.
 
-use crate::generate::Shader;
-use fathom_core::eval::Evaluator;
+use crate::generate::{Probe, Shader};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -101,10 +100,11 @@ impl RootSpec {
 }
 
 /// The bounding box of the cells that test full when `[-half, half]^3` is subdivided `levels`
-/// levels (only full cells are refined), or `None` when nothing is full.
+/// levels (only full cells are refined), or `None` when nothing is full. World coordinates:
+/// runs before the explorer moves the shader's origin off zero.
 pub fn fit_bounds(sh: &Shader, half: f64, levels: u32) -> Option<(DVec3, DVec3)> {
     // Cells as (integer corner, level); side = 2 half / 2^level.
-    let full = |ev: &mut Evaluator<f64>, c: [u32; 3], level: u32| {
+    let full = |ev: &mut Probe, c: [u32; 3], level: u32| {
         let s = 2.0 * half / (1u64 << level) as f64;
         let centre =
             DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * s + DVec3::splat(-half + 0.5 * s);
@@ -113,7 +113,7 @@ pub fn fit_bounds(sh: &Shader, half: f64, levels: u32) -> Option<(DVec3, DVec3)>
         sh.full(ev, centre, 0.5 * s * 3f64.sqrt()).is_some()
             || sh.corner_inside(ev, centre, 0.5 * s)
     };
-    let mut ev = Evaluator::<f64>::new();
+    let mut ev = Probe::new();
     if !full(&mut ev, [0; 3], 0) {
         return None;
     }
@@ -121,7 +121,7 @@ pub fn fit_bounds(sh: &Shader, half: f64, levels: u32) -> Option<(DVec3, DVec3)>
     for level in 1..=levels {
         cells = cells
             .par_iter()
-            .map_init(Evaluator::<f64>::new, |ev, c| {
+            .map_init(Probe::new, |ev, c| {
                 let mut out = Vec::new();
                 for o in 0..8u32 {
                     let k = [
@@ -178,7 +178,7 @@ mod tests {
         let sh = Shader::new(&mb, 0.01).unwrap();
         let (min, size) = RootSpec::default().resolve(&sh);
         assert!(size < 3.0, "mandelbulb root side {size}");
-        let mut ev = Evaluator::<f64>::new();
+        let mut ev = Probe::new();
         // Rays from far away towards the centre: where each first reaches the surface is
         // inside the root. Every ray aims at the bulb's centre, so every ray must get there.
         let mut reached = 0;
@@ -191,7 +191,7 @@ mod tests {
             let o = dir * 4.0;
             for _ in 0..2000 {
                 let p = o - dir * t;
-                let d = ev.distance(&sh.tape, fathom_core::V3::new(p.x, p.y, p.z));
+                let d = sh.distance(&mut ev, p);
                 if d < 1e-9 {
                     let u = (p - min) / size;
                     assert!(

@@ -2,8 +2,10 @@
 //! on-the-fly link optimisation, and the kd-restart baseline.
 //!
 //! Both walk the same sequence of leaves and return bit-identical results on the same tree:
-//! - a ray is `o + t d` in root units (`d` unit length, so `t` is a distance in root units);
-//! - the leaf at a point is the one whose half-open box contains it; boxes are exact dyadics;
+//! - a ray is `o + t d` in local root units (relative to the tree's [`Anchor`](crate::octree::Anchor),
+//!   a lattice point near the eye; `d` unit length, so `t` is a distance in root units);
+//! - the leaf at a point is the one whose half-open box contains it; boxes are exact dyadics
+//!   near the anchor at any depth;
 //! - leaving an empty leaf, `t` becomes the exit distance and the point is put exactly on the
 //!   far side of the exit face (the face coordinate, or the float just below it);
 //! - implicit LOD: the ray stops at the topmost inner node on the root-to-leaf path of the
@@ -20,7 +22,7 @@
 
 use crate::evict::mark_visited;
 use crate::node::{NONE, REQUESTED};
-use crate::octree::{BoxU, MAX_DEPTH, Octree, dim_at};
+use crate::octree::{BoxU, Octree, dim_at};
 
 /// Most node steps one ray may take before it is declared a miss (a guard, never reached on a
 /// consistent tree).
@@ -102,21 +104,22 @@ impl Request {
 /// Where a ray starts: the leaf containing the eye and its box.
 pub type Start = Option<(u32, BoxU)>;
 
-/// Entry distance into the root and the point just inside it, or `None` when the ray misses.
-/// Uses the ray's reciprocal direction (no divisions).
-fn enter_root(r: &Ray) -> Option<(f64, [f64; 3])> {
+/// Entry distance into the root (box `root`, local units) and the point just inside it, or
+/// `None` when the ray misses. Uses the ray's reciprocal direction (no divisions).
+fn enter_root(r: &Ray, root: &BoxU) -> Option<(f64, [f64; 3])> {
     let mut t0 = 0.0f64;
     let mut t1 = f64::INFINITY;
     let mut axis = 3;
     for a in 0..3 {
+        let (min, max) = (root.min[a], root.min[a] + 1.0);
         if r.d[a] == 0.0 {
-            if r.o[a] < 0.0 || r.o[a] >= 1.0 {
+            if r.o[a] < min || r.o[a] >= max {
                 return None;
             }
             continue;
         }
-        let lo = -r.o[a] * r.inv[a];
-        let hi = (1.0 - r.o[a]) * r.inv[a];
+        let lo = (min - r.o[a]) * r.inv[a];
+        let hi = (max - r.o[a]) * r.inv[a];
         let (n, f) = if r.d[a] > 0.0 { (lo, hi) } else { (hi, lo) };
         if n > t0 {
             t0 = n;
@@ -129,28 +132,23 @@ fn enter_root(r: &Ray) -> Option<(f64, [f64; 3])> {
     }
     // Clamp into the root like `exit` does: within an ulp of a root edge, `o + t0 d` can round
     // outside, which would turn a hit on a root face into a miss.
-    let mut p = point(r, t0).map(|c| c.clamp(0.0, 1f64.next_down()));
+    let mut p: [f64; 3] = std::array::from_fn(|a| {
+        let c = r.o[a] + t0 * r.d[a];
+        c.clamp(root.min[a], (root.min[a] + 1.0).next_down())
+    });
     if axis < 3 {
         p[axis] = if r.d[axis] > 0.0 {
-            0.0
+            root.min[axis]
         } else {
-            1f64.next_down()
+            (root.min[axis] + 1.0).next_down()
         };
     }
     Some((t0, p))
 }
 
-#[inline(always)]
-fn point(r: &Ray, t: f64) -> [f64; 3] {
-    [
-        r.o[0] + t * r.d[0],
-        r.o[1] + t * r.d[1],
-        r.o[2] + t * r.d[2],
-    ]
-}
-
-/// `x.next_down()` for the box coordinates `exit` uses (finite, `>= 0`), without the NaN and
-/// infinity checks of the general function: one integer decrement for `x > 0`.
+/// `x.next_down()` for the finite box coordinates `exit` uses, without the NaN and infinity
+/// checks of the general function: one integer decrement for `x > 0` (local coordinates can
+/// be negative: those take the general function).
 #[inline(always)]
 fn below(x: f64) -> f64 {
     if x > 0.0 {
@@ -234,7 +232,7 @@ fn stop_here(
     if n.is_empty() {
         return None;
     }
-    if b.dim() > t * lod && b.depth < MAX_DEPTH && n.claim(REQUESTED) {
+    if b.dim() > t * lod && b.depth < tree.depth_limit() && n.claim(REQUESTED) {
         reqs.push(Request { id, b: *b, t });
     }
     Some(Hit {
@@ -262,14 +260,15 @@ pub fn cast_neighbour(
     let outside = start.is_none();
     let (mut id, mut b, mut t, mut p) = match start {
         Some((id, b)) => (id, b, 0.0, r.o),
-        None => match enter_root(r) {
+        None => match enter_root(r, &tree.root_box()) {
             Some((t, p)) => match *entry {
                 Some((id, b)) => (id, b, t, p),
-                None => (0, BoxU::ROOT, t, p),
+                None => (0, tree.root_box(), t, p),
             },
             None => return Hit::miss(0),
         },
     };
+    let anchor = &tree.anchor;
     let mut first = outside;
     let mut last_brick = NONE;
     let lod = r.lod;
@@ -288,7 +287,7 @@ pub fn cast_neighbour(
             }
             opt = None;
             id = nodes[id as usize].parent;
-            b = b.parent();
+            b = anchor.parent(&b);
             steps += 1;
         }
         // Descend to the leaf, or stop early on an inner node below the footprint.
@@ -356,7 +355,7 @@ pub fn cast_neighbour(
         b = if nd == b.depth {
             b.across(f)
         } else {
-            b.across(f).snapped(nd)
+            anchor.snap(&b.across(f), nd)
         };
         id = nb;
         t = t1;
@@ -371,16 +370,17 @@ pub fn cast_kdrestart(tree: &Octree, r: &Ray, eye_inside: bool, reqs: &mut Vec<R
     let (mut t, mut p) = if eye_inside {
         (0.0, r.o)
     } else {
-        match enter_root(r) {
+        match enter_root(r, &tree.root_box()) {
             Some(x) => x,
             None => return Hit::miss(0),
         }
     };
+    let root = tree.root_box();
     let lod = r.lod;
     let mut steps = 0u32;
     let mut last_brick = NONE;
     loop {
-        let mut b = BoxU::ROOT;
+        let mut b = root;
         if !b.contains(p) {
             return Hit::miss(steps);
         }
