@@ -48,6 +48,8 @@ pub struct Anchor {
     /// anchor, per axis (a multiple of `2^-depth` in `(-2^-d, 0]`, exact). Zero at `d >= depth`,
     /// where the anchor itself lies on the lattice.
     off: Vec<[f64; 3]>,
+    /// The root box in local coordinates (kept: rays entering the root ask for it).
+    root: BoxU,
 }
 
 impl Default for Anchor {
@@ -64,7 +66,16 @@ impl Anchor {
         let off = (0..depth)
             .map(|d| cell.map(|c| -(c.rem_euclid(1i128 << (depth - d)) as f64) * unit))
             .collect();
-        Anchor { depth, cell, off }
+        let root = BoxU {
+            min: cell.map(|c| -(c as f64) * unit),
+            depth: 0,
+        };
+        Anchor {
+            depth,
+            cell,
+            off,
+            root,
+        }
     }
 
     /// The anchor of depth `depth` at the lattice point at or below root-unit point `u`
@@ -97,11 +108,7 @@ impl Anchor {
     /// The root box in local coordinates.
     #[inline(always)]
     pub fn root_box(&self) -> BoxU {
-        let unit = dim_at(self.depth);
-        BoxU {
-            min: self.cell.map(|c| -(c as f64) * unit),
-            depth: 0,
-        }
+        self.root
     }
 
     /// The box at depth `d <= b.depth` that contains `b`.
