@@ -13,7 +13,9 @@ use crate::session::Session;
 use fathom_core::Camera;
 use fathom_core::Scene;
 use fathom_core::Tape;
-use fathom_core::camera_path::{CameraPath, ExactCube, PathPreset, surface_point, view_target};
+use fathom_core::camera_path::{
+    CameraPath, ExactCube, PathPreset, surface_point, target_tail, view_target,
+};
 use fathom_core::frame::Frame;
 use fathom_svo::stats::Summary;
 use fathom_svo::{FrameStats, Traversal};
@@ -164,7 +166,8 @@ pub enum Aim {
 
 impl ZoomPath {
     /// A zoom from `view`'s eye into the surface of `scene` where `aim`'s ray first reaches it
-    /// (bracketed to f64 precision, the outside point: [`surface_point`]); the camera then
+    /// (bracketed to f64 precision, the outside point: [`surface_point`], with its
+    /// double-double tail from [`target_tail`]); the camera then
     /// looks at that point from along the ray, so an aimed pixel moves to the image centre.
     pub fn aim(
         name: &str,
@@ -249,6 +252,7 @@ impl ZoomPath {
             fov: view.fov,
             path: CameraPath::Zoom {
                 target,
+                target_lo: target_tail(&tape, eye, target),
                 dir: (eye - target).normalize(),
                 start: (eye - target).length(),
             },
