@@ -1,13 +1,17 @@
 //! Camera paths over a number of frames, for every renderer: a zoom into a point (the eye's
 //! distance to it shrinks geometrically, so each frame zooms by the same factor) and a tour
 //! (a [`crate::flight`] path through eye and look-at waypoints); and how to find the point to zoom
-//! into: the surface point of a view, bracketed to f64 precision. [`path_preset`] pairs scenes
-//! with paths (the zooms and the tour of `fathom zoom`).
+//! into: the surface point of a view, bracketed to f64 precision ([`surface_point`]) and refined
+//! to double-double precision ([`surface_point_dd`]), so a zoom past 1e15 has an exact target and
+//! eye ([`CameraPath::eye_dd`], [`CameraPath::deep_camera`]). [`path_preset`] pairs scenes with
+//! paths (the zooms and the tour of `fathom zoom`).
 
 use crate::camera::Camera;
+use crate::dd::{Dd, add_offset};
 use crate::eval::Evaluator;
 use crate::flight::{FlightPath, Keyframe};
 use crate::presets::{self, PresetError};
+use crate::real::Real;
 use crate::scene::Scene;
 use crate::scenes;
 use crate::tape::Tape;
@@ -19,8 +23,13 @@ use glam::DVec3;
 pub enum CameraPath {
     /// Eye at `target + dir * start * depth^(-i / (frames - 1))`, looking at `target`.
     Zoom {
-        /// Point zoomed into.
+        /// Point zoomed into (for a surface target, the outside point of the f64 bracket).
         target: DVec3,
+        /// What `target` misses of the double-double target: the point zoomed into is
+        /// `target + target_lo` to ~1e-32 ([`CameraPath::target_dd`]). Zero when `target` is
+        /// exact (the Menger corner) or was not refined; it matters past zoom ~1e14, where
+        /// an f64 target is as far from the surface as the eye.
+        target_lo: DVec3,
         /// Unit direction from the target to the eye.
         dir: DVec3,
         /// Eye distance at frame 0.
@@ -36,13 +45,32 @@ pub enum CameraPath {
 impl CameraPath {
     /// A zoom from `cam`'s eye into the surface point of its view ([`view_target`]), or `None`
     /// when the view shows no surface.
+    ///
+    /// The target is refined to double-double precision along the same ray
+    /// ([`surface_point_dd`]; its tail goes to `target_lo`), so the path stays sharp past
+    /// zoom 1e15 ([`CameraPath::eye_dd`]).
     pub fn zoom_into_view(tape: &Tape, cam: &Camera) -> Option<CameraPath> {
-        let target = view_target(tape, cam)?;
+        let (target, ray) = view_target_ray(tape, cam)?;
+        let target_lo = surface_point_dd(tape, cam.eye, ray).map_or(DVec3::ZERO, |t| {
+            crate::dd::sub_to_f64(t, crate::dd::dd3(target))
+        });
         Some(CameraPath::Zoom {
             target,
+            target_lo,
             dir: (cam.eye - target).normalize(),
             start: (cam.eye - target).length(),
         })
+    }
+
+    /// A zoom into `target` from distance `start` along unit `dir`, with no double-double tail
+    /// (the target is taken as exact).
+    pub fn zoom(target: DVec3, dir: DVec3, start: f64) -> CameraPath {
+        CameraPath::Zoom {
+            target,
+            target_lo: DVec3::ZERO,
+            dir,
+            start,
+        }
     }
 
     /// The camera at frame `i` of `frames` for a zoom of `depth` (ratio of first to last eye
@@ -54,9 +82,9 @@ impl CameraPath {
             0.0
         };
         let (eye, target) = match self {
-            CameraPath::Zoom { target, dir, start } => {
-                (*target + *dir * (start * depth.powf(-f)), *target)
-            }
+            CameraPath::Zoom {
+                target, dir, start, ..
+            } => (*target + *dir * (start * depth.powf(-f)), *target),
             CameraPath::Tour { points } => tour_point(points, f),
         };
         let fwd = (target - eye).normalize();
@@ -86,6 +114,77 @@ impl CameraPath {
         match self {
             CameraPath::Zoom { target, .. } => Some(*target),
             CameraPath::Tour { .. } => None,
+        }
+    }
+
+    /// The point zoomed into to double-double precision (`target + target_lo`), for zooms.
+    pub fn target_dd(&self) -> Option<V3<Dd>> {
+        match self {
+            CameraPath::Zoom {
+                target, target_lo, ..
+            } => Some(V3::new(
+                Dd::new(target.x, target_lo.x),
+                Dd::new(target.y, target_lo.y),
+                Dd::new(target.z, target_lo.z),
+            )),
+            CameraPath::Tour { .. } => None,
+        }
+    }
+
+    /// The eye's offset from the target at frame `i` (`dir * start * depth^-f`), for zooms: a
+    /// small f64 vector with full relative precision at any depth.
+    pub fn eye_offset(&self, i: usize, frames: usize, depth: f64) -> Option<DVec3> {
+        match self {
+            CameraPath::Zoom { dir, start, .. } => {
+                Some(*dir * (start * depth.powf(-self.frame_fraction(i, frames))))
+            }
+            CameraPath::Tour { .. } => None,
+        }
+    }
+
+    /// The eye at frame `i` in double-double: `target_dd + dir * distance`, for zooms. Exact
+    /// to ~1e-32 of the coordinates, so a frame at zoom 1e15..1e28 has an eye at the right
+    /// distance from the target (in f64 the eye of a zoom past ~1e16 coincides with the
+    /// target).
+    pub fn eye_dd(&self, i: usize, frames: usize, depth: f64) -> Option<V3<Dd>> {
+        Some(add_offset(
+            self.target_dd()?,
+            self.eye_offset(i, frames, depth)?,
+        ))
+    }
+
+    /// The frame-`i` camera of a zoom for deep frames: the eye in double-double
+    /// ([`CameraPath::eye_dd`]) and a camera in coordinates relative to the target (eye at
+    /// the offset, looking at the origin), exact at any depth. Renderers take the orientation
+    /// and field of view from the camera and add its rays to the double-double eye.
+    pub fn deep_camera(
+        &self,
+        i: usize,
+        frames: usize,
+        depth: f64,
+        fov: f64,
+    ) -> Option<(V3<Dd>, Camera)> {
+        let off = self.eye_offset(i, frames, depth)?;
+        let up = if off.cross(DVec3::Y).length() > 1e-3 * off.length() {
+            DVec3::Y
+        } else {
+            DVec3::X
+        };
+        let cam = Camera {
+            eye: off,
+            target: DVec3::ZERO,
+            up,
+            fov,
+        };
+        Some((self.eye_dd(i, frames, depth)?, cam))
+    }
+
+    /// `i / (frames - 1)`, 0 for a single frame.
+    fn frame_fraction(&self, i: usize, frames: usize) -> f64 {
+        if frames > 1 {
+            i as f64 / (frames - 1) as f64
+        } else {
+            0.0
         }
     }
 }
@@ -138,11 +237,7 @@ pub fn path_preset(name: &str) -> Result<PathPreset, PresetError> {
             name: "menger",
             scene: scenes::menger(40),
             fov: 50.0,
-            path: CameraPath::Zoom {
-                target: DVec3::ONE,
-                dir: DVec3::new(1.0, 0.8, 0.6).normalize(),
-                start: 1.5,
-            },
+            path: CameraPath::zoom(DVec3::ONE, DVec3::new(1.0, 0.8, 0.6).normalize(), 1.5),
             cube: menger_cube,
         }),
         "mandelbulb" => {
@@ -229,13 +324,18 @@ fn tour_point(p: &[(DVec3, DVec3)], f: f64) -> (DVec3, DVec3) {
 /// or, if that misses, of the first ray that hits on a spiral of image points around the
 /// centre.
 pub fn view_target(tape: &Tape, cam: &Camera) -> Option<DVec3> {
+    view_target_ray(tape, cam).map(|(p, _)| p)
+}
+
+/// [`view_target`] and the unit direction of the ray that found it.
+fn view_target_ray(tape: &Tape, cam: &Camera) -> Option<(DVec3, DVec3)> {
     let f = cam.frame();
     (0..64).find_map(|i| {
         // Golden-angle spiral over the middle of a 1x1 image.
         let r = 0.4 * (i as f64 / 64.0).sqrt();
         let a = i as f64 * 2.399_963_229_728_653;
         let d = f.ray_dir(0.5 + r * a.cos(), 0.5 + r * a.sin(), 1, 1);
-        surface_point(tape, cam.eye, d)
+        surface_point(tape, cam.eye, d).map(|p| (p, d))
     })
 }
 
@@ -246,6 +346,13 @@ pub fn view_target(tape: &Tape, cam: &Camera) -> Option<DVec3> {
 /// neighbouring floats along the ray. Returns the outside point, so every point of the ray
 /// before it (where the eye of a zoom into it travels) was stepped over as outside.
 pub fn surface_point(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> {
+    surface_bracket(tape, eye, dir).map(|(lo, _)| eye + dir * lo)
+}
+
+/// The distances `(lo, hi)` along the ray of [`surface_point`]: `eye + dir * lo` is outside,
+/// `eye + dir * hi` inside, and they are neighbouring floats (or `hi` is the first inside
+/// point found).
+fn surface_bracket(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<(f64, f64)> {
     let mut ev = Evaluator::<f64>::new();
     let mut dist = |t: f64| {
         let p = eye + dir * t;
@@ -302,7 +409,94 @@ pub fn surface_point(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> {
             hi = mid;
         }
     }
-    Some(eye + dir * lo)
+    Some((lo, hi))
+}
+
+/// What an f64 surface `target` seen from `eye` misses of the double-double surface point on
+/// the ray from `eye` through it ([`surface_point_dd`]): the `target_lo` of a
+/// [`CameraPath::Zoom`]. Zero when there is none within 1e-13 of the coordinates (a target
+/// that is not a bracketed surface point, such as one of `fathom zoom`'s near-surface targets).
+pub fn target_tail(tape: &Tape, eye: DVec3, target: DVec3) -> DVec3 {
+    let dir = (target - eye).normalize_or_zero();
+    if dir == DVec3::ZERO {
+        return DVec3::ZERO;
+    }
+    let Some(p) = surface_point_dd(tape, eye, dir) else {
+        return DVec3::ZERO;
+    };
+    let tail = crate::dd::sub_to_f64(p, crate::dd::dd3(target));
+    if tail.abs().max_element() <= 1e-13 * target.abs().max_element().max(1.0) {
+        tail
+    } else {
+        DVec3::ZERO
+    }
+}
+
+/// Width (relative to the size of the point's coordinates, at least 1) below which
+/// [`surface_point_dd`] stops bisecting: about 100 double-double ulps.
+pub const DD_BRACKET: f64 = 1e-30;
+
+/// [`surface_point`] refined to double-double precision: the f64 bracket along the ray is
+/// checked (and widened if needed) with double-double evaluation, then bisected in
+/// double-double until the outside and inside points are within [`DD_BRACKET`] of each other
+/// (relative to the coordinates, at least 1). Same rule: outside is `d > 0`, inside
+/// `d <= 0` or NaN; for the Mandelbulb the surface is the boundary of the points that do not
+/// escape in its iteration count. Returns the outside point, or `None` where
+/// [`surface_point`] finds nothing.
+///
+/// Meaningful where the estimator is exact in double-double (see [`crate::dd`]): the power-8
+/// Mandelbulb, the Mandelbox, the folding fractals and polynomial primitives; for estimators
+/// with trigonometry the refined point is only as good as their f64 accuracy.
+pub fn surface_point_dd(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<V3<Dd>> {
+    let (lo, hi) = surface_bracket(tape, eye, dir)?;
+    let mut ev = Evaluator::<Dd>::new();
+    let e = crate::dd::dd3(eye);
+    let at = |t: Dd| V3::new(e.x + t * dir.x, e.y + t * dir.y, e.z + t * dir.z);
+    let mut outside = |t: Dd| ev.distance(tape, at(t)) > Dd::ZERO; // NaN counts as inside
+    // The f64 bracket seen in double-double: widen either end (doubling) until it holds.
+    let (mut lo, mut hi) = (Dd::from(lo), Dd::from(hi));
+    let mut w = (hi - lo)
+        .hi
+        .max(lo.hi.abs() * f64::EPSILON)
+        .max(f64::MIN_POSITIVE);
+    let mut tries = 0;
+    while !outside(lo) {
+        lo = (lo - w).max(Dd::ZERO);
+        w *= 2.0;
+        tries += 1;
+        if tries > 60 || lo.hi <= 0.0 && !outside(lo) {
+            return None;
+        }
+    }
+    let mut w = (hi - lo).hi.max(f64::MIN_POSITIVE);
+    let mut tries = 0;
+    while outside(hi) {
+        lo = hi;
+        hi += w;
+        w *= 2.0;
+        tries += 1;
+        if tries > 60 {
+            return None;
+        }
+    }
+    let p = at(lo);
+    let scale = p.x.hi.abs().max(p.y.hi.abs()).max(p.z.hi.abs()).max(1.0);
+    for _ in 0..200 {
+        let width = (hi - lo).hi;
+        if width * dir.abs().max_element() <= DD_BRACKET * scale {
+            break;
+        }
+        let mid = (lo + hi) * 0.5;
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if outside(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(at(lo))
 }
 
 #[cfg(test)]
@@ -312,11 +506,7 @@ mod tests {
 
     #[test]
     fn zooms_reach_their_depth_and_tours_hit_their_waypoints() {
-        let z = CameraPath::Zoom {
-            target: DVec3::ONE,
-            dir: DVec3::new(1.0, 0.8, 0.6).normalize(),
-            start: 1.5,
-        };
+        let z = CameraPath::zoom(DVec3::ONE, DVec3::new(1.0, 0.8, 0.6).normalize(), 1.5);
         let d0 = (z.camera(0, 11, 1e10, 50.0).eye - DVec3::ONE).length();
         let d1 = (z.camera(10, 11, 1e10, 50.0).eye - DVec3::ONE).length();
         assert!((d0 / d1 / 1e10 - 1.0).abs() < 1e-4, "{}", d0 / d1);
@@ -366,7 +556,10 @@ mod tests {
         let pp = path_preset("mandelbulb").unwrap();
         let (scene, p) = (&pp.scene, &pp.path);
         let tape = Tape::compile(scene).unwrap();
-        let CameraPath::Zoom { target, dir, start } = *p else {
+        let CameraPath::Zoom {
+            target, dir, start, ..
+        } = *p
+        else {
             panic!()
         };
         let d = |q: DVec3| tape.eval_f64([q.x, q.y, q.z]).d;
@@ -397,5 +590,107 @@ mod tests {
                 p.zoom_at(i, frames, 1e13)
             );
         }
+    }
+    #[test]
+    fn dd_surface_points_are_bracketed_to_double_double_precision() {
+        let tape = Tape::compile(&scenes::sphere(1.0)).unwrap();
+        let d = |q: V3<Dd>| tape.eval_dd(q).d;
+        for (eye, dir) in [
+            (DVec3::new(0.0, 0.0, 3.0), DVec3::NEG_Z),
+            (DVec3::new(0.0, 0.999, 3.0), DVec3::NEG_Z),
+            (
+                DVec3::new(2.0, 1.5, 1.0),
+                DVec3::new(-2.0, -1.4, -1.1).normalize(),
+            ),
+        ] {
+            let q = surface_point_dd(&tape, eye, dir).unwrap();
+            // |q|^2 - 1 in double-double: on the sphere to ~1e-30 (f64 gets ~1e-16).
+            let r2 = q.x * q.x + q.y * q.y + q.z * q.z - Dd::ONE;
+            assert!(r2.hi.abs() < 1e-29, "{eye:?}: |q|^2 - 1 = {r2:?}");
+            assert!(d(q) > Dd::ZERO, "{eye:?}: the point is inside");
+            assert!(
+                d(add_offset(q, dir * 1e-28)) <= Dd::ZERO,
+                "{eye:?}: not bracketed"
+            );
+        }
+        assert!(surface_point_dd(&tape, DVec3::new(0.0, 2.0, 3.0), DVec3::NEG_Z).is_none());
+    }
+
+    #[test]
+    fn mandelbulb_dd_target_is_bracketed_and_deep_eyes_stay_outside() {
+        let pp = path_preset("mandelbulb").unwrap();
+        let tape = Tape::compile(&pp.scene).unwrap();
+        let p = &pp.path;
+        let CameraPath::Zoom {
+            target,
+            target_lo,
+            dir,
+            start,
+        } = *p
+        else {
+            panic!()
+        };
+        let d = |q: V3<Dd>| tape.eval_dd(q).d;
+        let t = p.target_dd().unwrap();
+        // The double-double target is outside and 1e-25 further along the view is inside.
+        assert!(d(t) > Dd::ZERO, "target inside: {:?}", d(t));
+        assert!(
+            d(add_offset(t, -dir * 1e-25)) <= Dd::ZERO,
+            "no inside point within 1e-25 beyond the target"
+        );
+        // The f64 target alone is not: it is outside by more than 1e-25 (its tail is ~1e-17,
+        // as far from the surface as the eye of a zoom to 1e17).
+        let t64 = crate::dd::dd3(target);
+        assert!(d(add_offset(t64, -dir * 1e-25)) > Dd::ZERO);
+        eprintln!("f64 target's tail: {target_lo:?}");
+        assert!(target_lo != DVec3::ZERO);
+        assert!(target_lo.abs().max_element() < 1e-14);
+        for depth in [1e15, 1e18] {
+            let dist = start / depth;
+            let eye = p.eye_dd(1, 2, depth).unwrap();
+            assert!(d(eye) > Dd::ZERO, "zoom {depth:e}: eye inside");
+            // The double-double eye is at its distance from the target, to f64 precision.
+            let got = crate::dd::sub_to_f64(eye, t);
+            assert!((got - dir * dist).length() <= 1e-15 * dist, "{got:?}");
+            // The f64 eye cannot be placed: at 1e15 its offset from the target is off by more
+            // than 0.1 % (1.3 % measured: ulps of a coordinate near 1 against 2e-15); at 1e18
+            // it is the target itself.
+            let eye64 = p.camera(1, 2, depth, pp.fov).eye;
+            let err = ((eye64 - target) - dir * dist).length() / dist;
+            eprintln!("zoom {depth:e}: f64 eye offset error {err:.2e} of the eye distance");
+            if depth == 1e15 {
+                assert!(err > 1e-3, "{err}");
+            } else {
+                assert_eq!(eye64, target);
+            }
+        }
+        // Every frame of a zoom to 1e20 keeps its eye outside, and its deep camera is valid
+        // and looks along -dir.
+        let frames = 120;
+        for i in 0..frames {
+            let (eye, cam) = p.deep_camera(i, frames, 1e20, pp.fov).unwrap();
+            assert!(d(eye) > Dd::ZERO, "frame {i}: eye inside");
+            cam.validate().unwrap();
+            assert!((cam.frame().forward + dir).length() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn menger_corner_eyes_are_exact() {
+        let pp = path_preset("menger").unwrap();
+        assert_eq!(pp.path.target_dd(), Some(crate::dd::dd3(DVec3::ONE)));
+        let CameraPath::Zoom { dir, start, .. } = pp.path else {
+            panic!()
+        };
+        for depth in [1e15, 1e20, 1e25] {
+            let eye = pp.path.eye_dd(1, 2, depth).unwrap();
+            let off = crate::dd::sub_to_f64(eye, crate::dd::dd3(DVec3::ONE));
+            assert!((off - dir * (start / depth)).length() <= 1e-15 * start / depth);
+        }
+        assert!(
+            CameraPath::Tour { points: vec![] }
+                .eye_dd(0, 2, 1.0)
+                .is_none()
+        );
     }
 }

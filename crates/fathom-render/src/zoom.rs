@@ -14,8 +14,9 @@ use crate::session::Session;
 use fathom_core::Camera;
 use fathom_core::Scene;
 use fathom_core::Tape;
-use fathom_core::camera_path::{CameraPath, ExactCube, PathPreset, surface_point, view_target};
-use fathom_core::dd::Dd;
+use fathom_core::camera_path::{
+    CameraPath, ExactCube, PathPreset, surface_point, target_tail, view_target,
+};
 use fathom_core::frame::Frame;
 use fathom_svo::stats::Summary;
 use fathom_svo::{DeepEye, FrameStats, Traversal};
@@ -166,7 +167,8 @@ pub enum Aim {
 
 impl ZoomPath {
     /// A zoom from `view`'s eye into the surface of `scene` where `aim`'s ray first reaches it
-    /// (bracketed to f64 precision, the outside point: [`surface_point`]); the camera then
+    /// (bracketed to f64 precision, the outside point: [`surface_point`], with its
+    /// double-double tail from [`target_tail`]); the camera then
     /// looks at that point from along the ray, so an aimed pixel moves to the image centre.
     pub fn aim(
         name: &str,
@@ -251,6 +253,7 @@ impl ZoomPath {
             fov: view.fov,
             path: CameraPath::Zoom {
                 target,
+                target_lo: target_tail(&tape, eye, target),
                 dir: (eye - target).normalize(),
                 start: (eye - target).length(),
             },
@@ -272,16 +275,15 @@ impl ZoomPath {
     /// part and the true distance to the target.
     pub fn deep_camera(&self, i: usize, frames: usize, depth: f64) -> (Camera, DeepEye) {
         let cam = self.camera(i, frames, depth);
-        let CameraPath::Zoom { target, dir, start } = self.path else {
+        let (CameraPath::Zoom { target, dir, .. }, Some(off), Some(eye)) = (
+            &self.path,
+            self.path.eye_offset(i, frames, depth),
+            self.path.eye_dd(i, frames, depth),
+        ) else {
             let deep = DeepEye::of(&cam);
             return (cam, deep);
         };
-        let f = if frames > 1 {
-            i as f64 / (frames - 1) as f64
-        } else {
-            0.0
-        };
-        let dist = start * depth.powf(-f);
+        let dist = off.length();
         if dist > 1e-6 * target.abs().max_element().max(1.0) {
             return (
                 cam,
@@ -291,22 +293,17 @@ impl ZoomPath {
                 },
             );
         }
-        let eye: [Dd; 3] =
-            std::array::from_fn(|a| Dd::from(target[a]) + Dd::from(dir[a]) * Dd::from(dist));
-        let hi = DVec3::new(eye[0].hi, eye[1].hi, eye[2].hi);
-        let lo = DVec3::new(eye[0].lo, eye[1].lo, eye[2].lo);
+        let hi = DVec3::new(eye.x.hi, eye.y.hi, eye.z.hi);
         let cam = Camera {
             eye: hi,
-            target: hi - dir,
+            target: hi - *dir,
             ..cam
         };
-        (
-            cam,
-            DeepEye {
-                eye_lo: lo,
-                scale: dist,
-            },
-        )
+        let deep = DeepEye {
+            eye_lo: DVec3::new(eye.x.lo, eye.y.lo, eye.z.lo),
+            scale: dist,
+        };
+        (cam, deep)
     }
 }
 

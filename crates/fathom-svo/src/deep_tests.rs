@@ -24,7 +24,10 @@ fn cfg(w: u32, h: u32) -> ExplorerConfig {
 /// in double-double, looking along `-dir`.
 fn menger_camera(z: f64) -> (Camera, DeepEye) {
     let p = path_preset("menger").unwrap();
-    let fathom_core::camera_path::CameraPath::Zoom { target, dir, start } = p.path else {
+    let fathom_core::camera_path::CameraPath::Zoom {
+        target, dir, start, ..
+    } = p.path
+    else {
         unreachable!()
     };
     let dist = start / z;

@@ -455,7 +455,10 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
         "\n## Strict self-similarity of the Menger corner (320x240, settled)\n\n| pair | identical pixels | within 10% colour |\n|---|---|---|"
     );
     let p = path_preset("menger").map_err(|e| e.to_string())?;
-    let CameraPath::Zoom { target, dir, start } = p.path.clone() else {
+    let CameraPath::Zoom {
+        target, dir, start, ..
+    } = p.path.clone()
+    else {
         return Err("menger preset is not a zoom".into());
     };
     let mut imgs = Vec::new();

@@ -126,7 +126,7 @@ fn a_flight_zoom_is_the_camera_path_zoom() {
     use crate::camera_path::CameraPath;
     let (target, dir, start, depth) =
         (DVec3::ONE, DVec3::new(1.0, 0.8, 0.6).normalize(), 1.5, 1e10);
-    let z = CameraPath::Zoom { target, dir, start };
+    let z = CameraPath::zoom(target, dir, start);
     let f = FlightPath::zoom(target, dir, start, depth, 50.0)
         .prepare(&scenes::sphere(1.0), None)
         .unwrap();
