@@ -38,4 +38,6 @@ pub use session::{Counters, Rendered, SceneChange, Session};
 pub use stats::Stats;
 
 #[cfg(test)]
+mod deep_tests;
+#[cfg(test)]
 mod tests;

@@ -275,15 +275,16 @@ impl ZoomPath {
     /// part and the true distance to the target.
     pub fn deep_camera(&self, i: usize, frames: usize, depth: f64) -> (Camera, DeepEye) {
         let cam = self.camera(i, frames, depth);
-        let (CameraPath::Zoom { target, dir, .. }, Some(off), Some(eye)) = (
+        let (CameraPath::Zoom { target, dir, .. }, Some((eye, rel))) = (
             &self.path,
-            self.path.eye_offset(i, frames, depth),
-            self.path.eye_dd(i, frames, depth),
+            self.path.deep_camera(i, frames, depth, self.fov),
         ) else {
             let deep = DeepEye::of(&cam);
             return (cam, deep);
         };
-        let dist = off.length();
+        // `rel` is the camera in target-relative coordinates: its orientation is exact at any
+        // depth (the f64 camera's is not once eye and target round to the same point).
+        let dist = rel.eye.length();
         if dist > 1e-6 * target.abs().max_element().max(1.0) {
             return (
                 cam,
@@ -297,7 +298,8 @@ impl ZoomPath {
         let cam = Camera {
             eye: hi,
             target: hi - *dir,
-            ..cam
+            up: rel.up,
+            fov: rel.fov,
         };
         let deep = DeepEye {
             eye_lo: DVec3::new(eye.x.lo, eye.y.lo, eye.z.lo),
