@@ -65,7 +65,8 @@ pub struct ExplorerConfig {
     pub traversal: Traversal,
     /// Time per frame for subdivision, in milliseconds (at least `min_subdivisions` are done).
     pub subdivide_ms: f64,
-    /// Subdivisions done each frame whatever the time.
+    /// Subdivisions done each frame whatever the time, counted in f64 evaluations' worth: on
+    /// deep frames (double-double evaluation) a subdivision counts [`DEEP_COST`] times.
     pub min_subdivisions: usize,
     /// The root cube: fitted to the scene (default) or explicit.
     pub root: RootSpec,
@@ -526,7 +527,16 @@ impl Explorer {
         order_requests(&mut reqs);
         let mut out = [0u64; 3];
         let mut next = 0;
-        let batch = 64 * self.cfg.threads.max(1);
+
+        // The floor is a cost, not a count: a deep frame's subdivisions evaluate in
+        // double-double, ~5x the f64 time, and a floor of 256 of them would take ~80 ms.
+        let weight = if self.tree.anchor.depth > 0 {
+            DEEP_COST
+        } else {
+            1
+        };
+        // Batches of 64 f64 subdivisions' worth per thread, so the time check comes as often.
+        let batch = (64 / weight).max(1) * self.cfg.threads.max(1);
         let mut done_min = 0;
         while next < reqs.len() {
             let elapsed = t0.elapsed().as_secs_f64() * 1e3;
@@ -554,7 +564,7 @@ impl Explorer {
                     Outcome::Stale => {}
                 }
             }
-            done_min += chunk.len();
+            done_min += chunk.len() * weight;
             next = end;
         }
         for r in &reqs[next..] {
@@ -665,6 +675,11 @@ pub fn order_requests(reqs: &mut [Request]) {
             .then(a.id.cmp(&b.id))
     });
 }
+
+/// What one subdivision on a deep frame (double-double evaluation) counts towards
+/// [`ExplorerConfig::min_subdivisions`]: `fathom bench eval` measures double-double evaluation
+/// at 3.9-6.5x f64 for the fractal presets (5.8 Menger, 5.5 Mandelbulb).
+pub const DEEP_COST: usize = 5;
 
 /// How many levels above the eye's scale the anchor sits (see `Explorer::place_anchor`): the
 /// voxels the eye needs lie about 10 levels below that scale at 640x480, so boxes near the eye
