@@ -27,7 +27,9 @@
 //!
 //! The march is generic over [`Real`] ([`march_depths`]) so the same rule can run in f64, which
 //! is how the tests show what double-double buys. Rows run in parallel (rayon).
+//! [`zoom_frame_depths`] is the reference for frame `i` of a zoom path.
 
+use fathom_core::camera_path::CameraPath;
 use fathom_core::dd::{Dd, dd3};
 use fathom_core::real::Real;
 use fathom_core::{Camera, Evaluator, Tape, V3};
@@ -78,6 +80,26 @@ pub fn deep_depths(
     opts: &DeepOptions,
 ) -> Vec<Option<f64>> {
     march_depths::<Dd>(tape, eye, camera, width, height, opts)
+}
+
+/// The reference depths of frame `i` of `frames` of a zoom `path` to `depth` (vertical field
+/// of view `fov` degrees): [`deep_depths`] from the frame's double-double eye with the exact
+/// target-relative orientation of [`CameraPath::deep_camera`], options
+/// [`DeepOptions::for_scale`] of the eye's distance to the target. `None` for tours.
+#[allow(clippy::too_many_arguments)]
+pub fn zoom_frame_depths(
+    tape: &Tape,
+    path: &CameraPath,
+    i: usize,
+    frames: usize,
+    depth: f64,
+    fov: f64,
+    width: u32,
+    height: u32,
+) -> Option<Vec<Option<f64>>> {
+    let (eye, cam) = path.deep_camera(i, frames, depth, fov)?;
+    let opts = DeepOptions::for_scale(cam.eye.length());
+    Some(deep_depths(tape, eye, &cam, width, height, &opts))
 }
 
 /// [`deep_depths`] in f64 from an f64 eye: the same march without the extra precision.

@@ -1,8 +1,10 @@
 //! `fathom bench eval`: throughput of the tape interpreter on one thread, per preset, for the
-//! exact f64 scalar path and the f32x8 packet path, plus the cost of compiling a 100-node tree
-//! and of a parameter-only update. Prints JSON.
+//! exact f64 scalar path, the f32x8 packet path and the double-double path (the deep-zoom
+//! estimator: ns per evaluation and its cost relative to f64), plus the cost of compiling a
+//! 100-node tree and of a parameter-only update. Prints JSON.
 
 use clap::Args;
+use fathom_core::dd::{Dd, dd3};
 use fathom_core::presets::PRESETS;
 use fathom_core::{Evaluator, F32x8, Real, Scene, Tape, V3};
 use serde_json::json;
@@ -55,7 +57,8 @@ fn rate(secs: f64, mut f: impl FnMut()) -> f64 {
     calls as f64 / start.elapsed().as_secs_f64()
 }
 
-fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64) {
+/// Evaluations per second on the f64 scalar, f32x8 packet and double-double paths.
+fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64, f64) {
     let mut e64 = Evaluator::<f64>::new();
     let scalar = rate(secs, || {
         for p in pts {
@@ -75,7 +78,17 @@ fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64) {
             black_box(e32.distance(tape, *p));
         }
     }) * (packets.len() * 8) as f64;
-    (scalar, packet)
+    let dd_pts: Vec<V3<Dd>> = pts
+        .iter()
+        .map(|p| dd3(glam::DVec3::from_array(*p)))
+        .collect();
+    let mut edd = Evaluator::<Dd>::new();
+    let dd = rate(secs, || {
+        for p in &dd_pts {
+            black_box(edd.distance(tape, *p));
+        }
+    }) * pts.len() as f64;
+    (scalar, packet, dd)
 }
 
 pub fn run(a: EvalArgs) -> Result<(), String> {
@@ -93,13 +106,15 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         let scene = fathom_core::presets::load(p.name).map_err(|e| e.to_string())?;
         let tape = Tape::compile(&scene).map_err(|e| format!("{}: {e}", p.name))?;
         let pts = sample_points(&scene, 4096);
-        let (scalar, packet) = eval_rates(&tape, &pts, a.seconds);
+        let (scalar, packet, dd) = eval_rates(&tape, &pts, a.seconds);
         eprintln!(
-            "{:>18}: f64 {:>10.0}/s  f32x8 {:>11.0}/s  x{:.2}",
+            "{:>18}: f64 {:>10.0}/s  f32x8 {:>11.0}/s  x{:.2}  dd {:>8.1} ns  x{:.2} of f64",
             p.name,
             scalar,
             packet,
-            packet / scalar
+            packet / scalar,
+            1e9 / dd,
+            scalar / dd
         );
         rows.push(json!({
             "preset": p.name,
@@ -107,6 +122,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "f64_scalar_evals_per_s": scalar.round(),
             "f32_packet_evals_per_s": packet.round(),
             "packet_over_scalar": (packet / scalar * 100.0).round() / 100.0,
+            "f64_ns_per_eval": (1e10 / scalar).round() / 10.0,
+            "dd_ns_per_eval": (1e10 / dd).round() / 10.0,
+            "dd_over_f64": (scalar / dd * 100.0).round() / 100.0,
         }));
     }
     let scene = fathom_core::scenes::hundred_node_scene();

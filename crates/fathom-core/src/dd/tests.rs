@@ -396,7 +396,7 @@ fn dd_evaluation_matches_f64_on_every_registry_entry_and_preset() {
 
 /// `(1, 1, 1) - v 3^-k` in double-double.
 fn corner_point_dd(v: DVec3, k: i32) -> V3<Dd> {
-    let s = 3f64.powi(k); // exact: 3^31 < 2^53
+    let s = Dd::from(3.0).powi(k); // exact: 3^66 < 2^106
     let c = |x: f64| Dd::ONE - Dd::from(x) / s;
     V3::new(c(v.x), c(v.y), c(v.z))
 }
@@ -407,8 +407,9 @@ fn menger_corner_self_similarity_holds_in_dd_and_fails_in_f64() {
     // and sort folds, which leave points near the corner alone), so k iterations take
     // (1,1,1) - 3^-k v to (1,1,1) - sort(v) exactly, and the estimate with N iterations there
     // is 3^-k times the estimate with N - k iterations at (1,1,1) - v. An identity in exact
-    // arithmetic: any difference is rounding.
-    const N: u32 = 40;
+    // arithmetic: any difference is rounding. k = 60 (3^60 = 4e28) shows the corner's special
+    // case: the target is exact, so the whole offset sits in `lo` with f64 relative precision.
+    const LEVELS: u32 = 9;
     // Offsets inside and outside the corner (components up to 2 keep the identity exact: the
     // middle cut `|z + 1| - 1` leaves z >= -1 alone).
     let mut rng = Rng(7);
@@ -421,12 +422,13 @@ fn menger_corner_self_similarity_holds_in_dd_and_fails_in_f64() {
             )
         })
         .collect();
-    let deep = Tape::compile(&scenes::menger(N)).unwrap();
+    let shallow = Tape::compile(&scenes::menger(LEVELS)).unwrap();
     let mut evdd = Evaluator::<Dd>::new();
     let mut ev64 = Evaluator::<f64>::new();
-    for k in [25, 31] {
-        let shallow = Tape::compile(&scenes::menger(N - k as u32)).unwrap();
-        let s = 3f64.powi(k);
+    for k in [25, 31, 60] {
+        let deep = Tape::compile(&scenes::menger(LEVELS + k as u32)).unwrap();
+        let s_dd = Dd::from(3.0).powi(k);
+        let s = s_dd.hi;
         let (mut f64_worst, mut dd_worst) = (0.0f64, 0.0f64);
         let mut compared = 0;
         for &v in &vs {
@@ -435,7 +437,7 @@ fn menger_corner_self_similarity_holds_in_dd_and_fails_in_f64() {
                 continue; // on the surface: relative differences mean nothing
             }
             compared += 1;
-            let got = (evdd.distance(&deep, corner_point_dd(v, k)) * s).to_f64();
+            let got = (evdd.distance(&deep, corner_point_dd(v, k)) * s_dd).to_f64();
             let err = (got - want).abs() / want.abs();
             dd_worst = dd_worst.max(err);
             assert!(
@@ -443,7 +445,7 @@ fn menger_corner_self_similarity_holds_in_dd_and_fails_in_f64() {
                 "k {k}, v {v:?}: dd {got} against {want} (relative {err:e})"
             );
             // The same in f64: the point itself is rounded to an ulp of 1 (1.1e-16), which is
-            // 3^-k v's 1e-4 (k = 25) or 7 % (k = 31).
+            // 3^-k v's 1e-4 (k = 25) or 7 % (k = 31); at k = 60 it is 1 itself.
             let p64 = DVec3::ONE - v / s;
             let got64 = ev64.distance(&deep, p64.into()) * s;
             f64_worst = f64_worst.max((got64 - want).abs() / want.abs());

@@ -209,8 +209,8 @@ fn mandelbulb_zoom_frames_find_the_target_at_any_depth() {
     for depth in [1e12, 1e15, 1e18] {
         let dist = start / depth;
         let opts = DeepOptions::for_scale(dist);
-        let (eye, cam) = pp.path.deep_camera(1, 2, depth, pp.fov).unwrap();
-        let deep = deep_depths(&tape, eye, &cam, w, h, &opts);
+        let (_, cam) = pp.path.deep_camera(1, 2, depth, pp.fov).unwrap();
+        let deep = zoom_frame_depths(&tape, &pp.path, 1, 2, depth, pp.fov, w, h).unwrap();
         let t = deep[centre].expect("the centre ray misses");
         // The tail-less eye only where it is asserted on.
         let (eye0, _) = tailless.deep_camera(1, 2, depth, pp.fov).unwrap();
