@@ -470,6 +470,22 @@ mod tests {
     }
 
     #[test]
+    fn zooms_go_past_f64_to_1e15_and_beyond() {
+        for preset in ["menger", "mandelbulb"] {
+            let mut a = args();
+            a.preset = Some(preset.into());
+            a.depth = 1e18;
+            a.frames = 24;
+            let r = run_zoom(&a, true).unwrap();
+            assert!(r.stopped.is_none(), "{preset}: {:?}", r.stopped);
+            assert_eq!(r.frames.len(), 24);
+            let last = r.frames.last().unwrap();
+            assert!(last.anchor_depth > 0, "{preset}: the last frame is relative to an anchor");
+            assert!(last.hits > 0, "{preset}: the last frame shows the surface");
+        }
+    }
+
+    #[test]
     fn a_zoom_past_double_double_precision_stops_cleanly() {
         let mut a = args();
         a.depth = 1e40;
