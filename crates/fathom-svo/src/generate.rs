@@ -151,17 +151,23 @@ impl Shader {
         })
     }
 
+    /// The double-double world point `origin + q`.
+    #[inline]
+    fn deep_point(&self, q: DVec3) -> V3<Dd> {
+        let o = &self.origin;
+        V3::new(
+            Dd::new(o.hi.x, o.lo.x) + Dd::from(q.x),
+            Dd::new(o.hi.y, o.lo.y) + Dd::from(q.y),
+            Dd::new(o.hi.z, o.lo.z) + Dd::from(q.z),
+        )
+    }
+
     /// The scene's value at `q` (world units relative to [`Shader::origin`]).
     #[inline]
     pub fn eval(&self, pr: &mut Probe, q: DVec3) -> fathom_core::Value<f64> {
         let o = &self.origin;
         if o.deep {
-            let p = V3::new(
-                Dd::new(o.hi.x, o.lo.x) + Dd::from(q.x),
-                Dd::new(o.hi.y, o.lo.y) + Dd::from(q.y),
-                Dd::new(o.hi.z, o.lo.z) + Dd::from(q.z),
-            );
-            to_f64(pr.dd.eval(&self.tape, p))
+            to_f64(pr.dd.eval(&self.tape, self.deep_point(q)))
         } else {
             let p = o.hi + q;
             pr.f64.eval(&self.tape, V3::new(p.x, p.y, p.z))
@@ -173,12 +179,7 @@ impl Shader {
     pub fn distance(&self, pr: &mut Probe, q: DVec3) -> f64 {
         let o = &self.origin;
         if o.deep {
-            let p = V3::new(
-                Dd::new(o.hi.x, o.lo.x) + Dd::from(q.x),
-                Dd::new(o.hi.y, o.lo.y) + Dd::from(q.y),
-                Dd::new(o.hi.z, o.lo.z) + Dd::from(q.z),
-            );
-            pr.dd.distance(&self.tape, p).hi
+            pr.dd.distance(&self.tape, self.deep_point(q)).hi
         } else {
             let p = o.hi + q;
             pr.f64.distance(&self.tape, V3::new(p.x, p.y, p.z))

@@ -13,36 +13,21 @@ use crate::tape::Tape;
 use crate::transforms::Transform;
 use crate::{Evaluator, scenes};
 
-/// SplitMix64, so failures reproduce.
-struct Rng(u64);
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [lo, hi).
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn int(&mut self, lo: i32, hi: i32) -> i32 {
-        lo + (self.next_u64() % (hi - lo + 1) as u64) as i32
-    }
-    /// A signed integer mantissa of 1 to 53 bits.
-    fn mantissa(&mut self) -> i64 {
-        let bits = self.int(1, 53);
-        let m = (self.next_u64() >> (64 - bits)) as i64 | 1;
-        if self.next_u64() & 1 == 1 { -m } else { m }
-    }
-    /// A random double-double of magnitude about `2^e` with a random trailing part.
-    fn dd(&mut self, e: i32) -> Dd {
-        let hi =
-            self.range(0.5, 1.0) * 2f64.powi(e) * if self.next_u64() & 1 == 1 { -1.0 } else { 1.0 };
-        let lo = self.range(-0.5, 0.5) * f64::EPSILON * hi.abs();
-        Dd::new(hi, lo)
-    }
+/// The tests' deterministic generator.
+use crate::testing::SplitMix64 as Rng;
+
+/// A signed integer mantissa of 1 to 53 bits.
+fn mantissa(rng: &mut Rng) -> i64 {
+    let bits = rng.int(1, 53);
+    let m = (rng.next_u64() >> (64 - bits)) as i64 | 1;
+    if rng.next_u64() & 1 == 1 { -m } else { m }
+}
+
+/// A random double-double of magnitude about `2^e` with a random trailing part.
+fn random_dd(rng: &mut Rng, e: i32) -> Dd {
+    let hi = rng.range(0.5, 1.0) * 2f64.powi(e) * if rng.next_u64() & 1 == 1 { -1.0 } else { 1.0 };
+    let lo = rng.range(-0.5, 0.5) * f64::EPSILON * hi.abs();
+    Dd::new(hi, lo)
 }
 
 /// `m 2^e` as an f64 (exact for |m| < 2^53 and e in the normal range).
@@ -64,7 +49,7 @@ fn two_sum_and_quick_two_sum_are_exact_against_integers() {
     for _ in 0..100_000 {
         // a = ma 2^ea, b = mb 2^eb with exponent gaps up to 70 (past the 53 where b is all
         // rounding error): both are integers at scale 2^min(ea, eb), which fit in i128.
-        let (ma, mb) = (rng.mantissa(), rng.mantissa());
+        let (ma, mb) = (mantissa(&mut rng), mantissa(&mut rng));
         let ea = rng.int(-300, 300);
         let eb = ea + rng.int(-70, 70);
         let (a, b) = (ldexp(ma, ea), ldexp(mb, eb));
@@ -91,7 +76,7 @@ fn two_sum_and_quick_two_sum_are_exact_against_integers() {
 fn two_prod_is_exact_against_integers() {
     let mut rng = Rng(2);
     for _ in 0..100_000 {
-        let (ma, mb) = (rng.mantissa(), rng.mantissa());
+        let (ma, mb) = (mantissa(&mut rng), mantissa(&mut rng));
         let (ea, eb) = (rng.int(-400, 400), rng.int(-400, 400));
         let (a, b) = (ldexp(ma, ea), ldexp(mb, eb));
         let (p, e) = two_prod(a, b);
@@ -155,7 +140,7 @@ fn arithmetic_is_accurate_to_double_double_precision() {
     let mut worst = [0.0f64; 5];
     for _ in 0..20_000 {
         let (ea, eb) = (rng.int(-20, 20), rng.int(-20, 20));
-        let (a, b) = (rng.dd(ea), rng.dd(eb));
+        let (a, b) = (random_dd(&mut rng, ea), random_dd(&mut rng, eb));
         let rel = |r: f64, scale: f64| r.abs() / scale.abs();
         // (a + b) - result, exactly.
         let s = a + b;
@@ -209,7 +194,7 @@ fn mixed_operations_with_f64_match_the_double_double_ones() {
     let mut rng = Rng(4);
     for _ in 0..10_000 {
         let e = rng.int(-10, 10);
-        let a = rng.dd(e);
+        let a = random_dd(&mut rng, e);
         let b = rng.range(-4.0, 4.0);
         let close = |x: Dd, y: Dd| ((x - y).hi).abs() <= 1e-30 * x.hi.abs().max(1e-300);
         assert!(close(a + b, a + Dd::from(b)));
@@ -288,7 +273,7 @@ fn transcendental_functions_are_f64_accurate_with_a_first_order_tail() {
     let mut rng = Rng(5);
     for _ in 0..1000 {
         let e = rng.int(-3, 1);
-        let x = rng.dd(e);
+        let x = random_dd(&mut rng, e);
         let h = x.hi;
         // Within two f64 ulps (of 1 for small results: the tail moves ln(1 + e) by e).
         let near =
