@@ -371,7 +371,10 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
     for (name, mut ex, cam) in views {
         ex.cfg.beam = 0;
         ex.settle(&cam, 300);
-        assert!(ex.skip().is_some(), "{name}: the eye must be inside the root");
+        assert!(
+            ex.skip().is_some(),
+            "{name}: the eye must be inside the root"
+        );
         let (plain, plain_steps) = render_beam(&mut ex, &cam, 0);
         let hits = plain.mask().iter().filter(|&&m| m).count();
         assert!(hits > 1000, "{name}: too few hits to compare: {hits}");

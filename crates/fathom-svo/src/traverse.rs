@@ -522,7 +522,7 @@ pub fn beam_start(tree: &Octree, c: &[Ray; 4], skip: (u32, BoxU)) -> (BeamStart,
         .map(|r| (r.d[0] * sum[0] + r.d[1] * sum[1] + r.d[2] * sum[2]) / len)
         .fold(f64::INFINITY, f64::min)
         * (1.0 - BEAM_SLACK);
-    if !(cmin > 0.0) {
+    if cmin.is_nan() || cmin <= 0.0 {
         return (best, 0);
     }
     let mut t = [0.0f64; 4];
