@@ -21,7 +21,9 @@ use crate::generate::{
 use crate::node::{NONE, REQUESTED, pack_rgb};
 use crate::octree::{Anchor, BoxU, Octree, dim_at};
 use crate::root::RootSpec;
-use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
+use crate::traverse::{
+    BeamStart, Hit, Ray, Request, beam_start, cast_from, cast_kdrestart, cast_neighbour,
+};
 use fathom_core::dd::Dd;
 use fathom_core::scene::Scene;
 use fathom_core::{Camera, CameraFrame};
@@ -70,6 +72,10 @@ pub struct ExplorerConfig {
     pub min_subdivisions: usize,
     /// The root cube: fitted to the scene (default) or explicit.
     pub root: RootSpec,
+    /// Side in pixels of the tiles whose rays start where a beam of the tile's corner rays
+    /// showed they all still are in one empty leaf (eye inside the root, neighbour traversal
+    /// only; the same images), or 0 for every ray from the skip node.
+    pub beam: u32,
 }
 
 impl Default for ExplorerConfig {
@@ -91,6 +97,7 @@ impl Default for ExplorerConfig {
             subdivide_ms: 12.0,
             min_subdivisions: 256,
             root: RootSpec::default(),
+            beam: DEFAULT_BEAM,
         }
     }
 }
@@ -122,6 +129,9 @@ impl ExplorerConfig {
         }
         if !(self.subdivide_ms.is_finite() && self.subdivide_ms >= 0.0) {
             return Err(OctreeError::SubdivideMs(self.subdivide_ms));
+        }
+        if self.beam > 256 {
+            return Err(OctreeError::Beam(self.beam));
         }
         self.root.validate()
     }
@@ -221,6 +231,9 @@ pub struct FrameStats {
     pub anchor_depth: u8,
     /// The largest voxel visible in this frame, in pixels ([`SvoImage::largest_voxel_px`]).
     pub largest_voxel_px: f64,
+    /// The part of `nodes_per_ray` the tiles' beams took (their corner rays' steps through
+    /// the leaves they walked, per ray of the image).
+    pub beam_nodes_per_ray: f64,
 }
 
 /// Resident set size of this process in bytes (Linux), or 0.
@@ -267,6 +280,7 @@ pub struct Explorer {
     pool: rayon::ThreadPool,
     skip: Option<(u32, BoxU)>,
     frame: u64,
+    beam_steps: u64,
 }
 
 impl Explorer {
@@ -299,12 +313,18 @@ impl Explorer {
             pool,
             skip: None,
             frame: 0,
+            beam_steps: 0,
         })
     }
 
     /// The current skip node and its box.
     pub fn skip(&self) -> Option<(u32, BoxU)> {
         self.skip
+    }
+
+    /// Node steps the tiles' beams took in the last render (included in its step count).
+    pub fn beam_steps(&self) -> u64 {
+        self.beam_steps
     }
 
     /// Brings the skip node up to date for an eye at `o` (local units): stays if still valid,
@@ -467,49 +487,105 @@ impl Explorer {
         let sky = self.sky;
         let size = tree.root_size;
         let pa = frame.pixel_angle(h);
+        let beam = self.cfg.beam as usize;
+        let beams = beam > 0 && trav == Traversal::Neighbour && skip.is_some();
+        // One pixel: its hit (or sky) into the row, the counts and the largest voxel.
+        let put = |x: usize,
+                   d: DVec3,
+                   hit: Hit,
+                   crow: &mut [u32],
+                   drow: &mut [f32],
+                   c: &mut [u64; 4],
+                   largest: &mut f64| {
+            c[0] += 1;
+            c[2] += hit.steps as u64;
+            if hit.is_hit() {
+                c[1] += 1;
+                let side = dim_at(tree.nodes[hit.node as usize].depth);
+                let px = (side / (hit.t * pa)).min(MAX_VOXEL_PX);
+                *largest = largest.max(px);
+                crow[x] = hit.colour;
+                drow[x] = (hit.t * size) as f32;
+            } else {
+                crow[x] = sky_colour(&frame, d, sky);
+                drow[x] = f32::INFINITY;
+            }
+        };
+        let reduce = |(mut ra, ca, la): (Vec<Request>, [u64; 4], f64),
+                      (rb, cb, lb): (Vec<Request>, [u64; 4], f64)| {
+            ra.extend(rb);
+            (ra, std::array::from_fn(|i| ca[i] + cb[i]), la.max(lb))
+        };
         let (reqs, counts, largest) = self.pool.install(|| {
-            colour
-                .par_chunks_mut(w as usize)
-                .zip(depth.par_chunks_mut(w as usize))
-                .enumerate()
-                .map(|(y, (crow, drow))| {
-                    let mut reqs = Vec::new();
-                    let mut c = [0u64; 3];
-                    let mut largest = 0f64;
-                    // Where the previous ray of this row entered the root (eye outside).
-                    let mut entry = None;
-                    for x in 0..w as usize {
-                        let d = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                        let ray = Ray::new(o, [d.x, d.y, d.z], lod);
-                        let hit = cast(tree, &ray, skip, &mut entry, trav, &mut reqs);
-                        c[0] += 1;
-                        c[2] += hit.steps as u64;
-                        if hit.is_hit() {
-                            c[1] += 1;
-                            let side = dim_at(tree.nodes[hit.node as usize].depth);
-                            let px = (side / (hit.t * pa)).min(MAX_VOXEL_PX);
-                            largest = largest.max(px);
-                            crow[x] = hit.colour;
-                            drow[x] = (hit.t * size) as f32;
-                        } else {
-                            crow[x] = sky_colour(&frame, d, sky);
-                            drow[x] = f32::INFINITY;
+            if let (true, Some(skip)) = (beams, skip) {
+                // Bands of `beam` rows, each cut into `beam`-wide tiles: the tile's corner
+                // pixels' rays find where all its rays can start (`beam_start`), then the
+                // rows are cast as before, each ray from its tile's start.
+                let ray = |x: usize, y: usize| {
+                    let d = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                    (d, Ray::new(o, [d.x, d.y, d.z], lod))
+                };
+                let band = beam * w as usize;
+                colour
+                    .par_chunks_mut(band)
+                    .zip(depth.par_chunks_mut(band))
+                    .enumerate()
+                    .map(|(k, (cband, dband))| {
+                        let mut reqs = Vec::new();
+                        let mut c = [0u64; 4];
+                        let mut largest = 0f64;
+                        let y0 = k * beam;
+                        let y1 = y0 + cband.len() / w as usize - 1;
+                        let starts: Vec<BeamStart> = (0..w as usize)
+                            .step_by(beam)
+                            .map(|x0| {
+                                let x1 = (x0 + beam).min(w as usize) - 1;
+                                let corners =
+                                    [ray(x0, y0).1, ray(x1, y0).1, ray(x0, y1).1, ray(x1, y1).1];
+                                let (s, n) = beam_start(tree, &corners, skip);
+                                c[2] += n as u64;
+                                c[3] += n as u64;
+                                s
+                            })
+                            .collect();
+                        let rows = cband
+                            .chunks_mut(w as usize)
+                            .zip(dband.chunks_mut(w as usize));
+                        for (j, (crow, drow)) in rows.enumerate() {
+                            let y = y0 + j;
+                            for x in 0..w as usize {
+                                let (d, r) = ray(x, y);
+                                let hit = cast_from(tree, &r, &starts[x / beam], &mut reqs);
+                                put(x, d, hit, crow, drow, &mut c, &mut largest);
+                            }
                         }
-                    }
-                    (reqs, c, largest)
-                })
-                .reduce(
-                    || (Vec::new(), [0u64; 3], 0f64),
-                    |(mut ra, ca, la), (rb, cb, lb)| {
-                        ra.extend(rb);
-                        (
-                            ra,
-                            [ca[0] + cb[0], ca[1] + cb[1], ca[2] + cb[2]],
-                            la.max(lb),
-                        )
-                    },
-                )
+                        (reqs, c, largest)
+                    })
+                    .reduce(|| (Vec::new(), [0u64; 4], 0f64), reduce)
+            } else {
+                colour
+                    .par_chunks_mut(w as usize)
+                    .zip(depth.par_chunks_mut(w as usize))
+                    .enumerate()
+                    .map(|(y, (crow, drow))| {
+                        let mut reqs = Vec::new();
+                        let mut c = [0u64; 4];
+                        let mut largest = 0f64;
+                        // Where the previous ray of this row entered the root (eye outside).
+                        let mut entry = None;
+                        for x in 0..w as usize {
+                            let d = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
+                            let ray = Ray::new(o, [d.x, d.y, d.z], lod);
+                            let hit = cast(tree, &ray, skip, &mut entry, trav, &mut reqs);
+                            put(x, d, hit, crow, drow, &mut c, &mut largest);
+                        }
+                        (reqs, c, largest)
+                    })
+                    .reduce(|| (Vec::new(), [0u64; 4], 0f64), reduce)
+            }
         });
+        self.beam_steps = counts[3];
+        let counts = [counts[0], counts[1], counts[2]];
         let img = SvoImage {
             width: w,
             height: h,
@@ -644,6 +720,7 @@ impl Explorer {
             skip_depth: self.skip.map(|s| s.1.depth as i32).unwrap_or(-1),
             anchor_depth: self.tree.anchor.depth,
             largest_voxel_px: img.largest_voxel_px,
+            beam_nodes_per_ray: self.beam_steps as f64 / c[0].max(1) as f64,
         };
         self.frame += 1;
         (img, stats)
@@ -687,6 +764,9 @@ pub const DEEP_COST: usize = 5;
 /// ([`crate::octree::ANCHOR_SPAN`]). Until the eye's scale is 37 levels below the root the
 /// anchor is the root's corner and frames are evaluated in f64 exactly as before.
 pub const ANCHOR_LEVELS_ABOVE: u8 = 36;
+
+/// Default tile side of the beam start ([`ExplorerConfig::beam`]).
+pub const DEFAULT_BEAM: u32 = 8;
 
 /// Voxels seen from closer than this many pixel footprints' worth (the eye inside a full
 /// voxel, `t` = 0) count as this many pixels: keeps the figure finite for JSON.

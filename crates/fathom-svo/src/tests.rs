@@ -327,3 +327,68 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
         );
     }
 }
+
+/// Renders with beam tiles of side `beam` (0: every ray from the skip node) without changing
+/// the tree; returns the image and the node steps (beams' included).
+fn render_beam(ex: &mut Explorer, cam: &Camera, beam: u32) -> (SvoImage, u64) {
+    ex.cfg.traversal = Traversal::Neighbour;
+    ex.cfg.beam = beam;
+    let (img, reqs, c) = ex.render(cam);
+    ex.release_requests(&reqs);
+    (img, c[2])
+}
+
+#[test]
+fn beam_start_gives_the_images_of_the_skip_node_start() {
+    // Settled views with the eye inside the root (the beams' case): the Mandelbulb zoom at two
+    // depths, at the default LOD and at a coarse one (fidelity 4: implicit LOD stops rays on
+    // inner nodes four pixels wide, so the beams' LOD test is what stops them), and the Menger
+    // sponge's central tunnel. Tiles of 8 (the default) and of 3 (partial tiles at the
+    // image's right and bottom edges). Each must give exactly the image of rays started at
+    // the skip node, and the beams must save steps (else the test would prove nothing).
+    let p = path_preset("mandelbulb").unwrap();
+    let mut views = Vec::new();
+    for (frame, fidelity) in [(150, 1.0), (299, 1.0), (299, 4.0)] {
+        let mut c = cfg(96, 72);
+        c.root = RootSpec::from_cube(p.cube);
+        c.fidelity = fidelity;
+        views.push((
+            format!("mandelbulb frame {frame} fidelity {fidelity}"),
+            Explorer::new(&p.scene, c).unwrap(),
+            p.camera(frame, 300, 1e11),
+        ));
+    }
+    views.push((
+        "menger tunnel".into(),
+        Explorer::new(&scenes::menger(8), cfg(96, 72)).unwrap(),
+        Camera {
+            eye: DVec3::new(0.02, 0.01, 0.7),
+            target: DVec3::new(0.3, 0.2, -1.0),
+            up: DVec3::Y,
+            fov: 70.0,
+        },
+    ));
+    for (name, mut ex, cam) in views {
+        ex.cfg.beam = 0;
+        ex.settle(&cam, 300);
+        assert!(
+            ex.skip().is_some(),
+            "{name}: the eye must be inside the root"
+        );
+        let (plain, plain_steps) = render_beam(&mut ex, &cam, 0);
+        let hits = plain.mask().iter().filter(|&&m| m).count();
+        assert!(hits > 1000, "{name}: too few hits to compare: {hits}");
+        for beam in [8, 3] {
+            let (img, steps) = render_beam(&mut ex, &cam, beam);
+            let beam_steps = ex.beam_steps();
+            assert_eq!(img, plain, "{name}: beam {beam} changed the image");
+            assert!(
+                beam_steps > 0 && steps < plain_steps,
+                "{name}: beam {beam} saved no steps ({steps} vs {plain_steps})"
+            );
+        }
+        let kd = render_with(&mut ex, &cam, Traversal::KdRestart);
+        assert_eq!(kd, plain, "{name}: kd-restart differs");
+        check(&ex.tree).unwrap();
+    }
+}
