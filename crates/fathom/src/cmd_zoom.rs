@@ -480,7 +480,10 @@ mod tests {
             assert!(r.stopped.is_none(), "{preset}: {:?}", r.stopped);
             assert_eq!(r.frames.len(), 24);
             let last = r.frames.last().unwrap();
-            assert!(last.anchor_depth > 0, "{preset}: the last frame is relative to an anchor");
+            assert!(
+                last.anchor_depth > 0,
+                "{preset}: the last frame is relative to an anchor"
+            );
             assert!(last.hits > 0, "{preset}: the last frame shows the surface");
         }
     }
