@@ -168,7 +168,8 @@ pub const DEEP_REFERENCE_PIXELS: u32 = 80 * 60;
 /// smallest common divisor of both sides that leaves at most [`DEEP_REFERENCE_PIXELS`]
 /// pixels (the largest common divisor if none does; 1 when the frame is small enough).
 pub fn deep_reduction(width: u32, height: u32) -> u32 {
-    let common = (1..=width.min(height)).filter(|f| width % f == 0 && height % f == 0);
+    let common =
+        (1..=width.min(height)).filter(|&f| width.is_multiple_of(f) && height.is_multiple_of(f));
     let mut last = 1;
     for f in common {
         last = f;
@@ -197,8 +198,8 @@ pub fn reduce(frame: &Frame, f: u32) -> Frame {
             for sy in 0..f {
                 for sx in 0..f {
                     let i = frame.index(x * f + sx, y * f + sy);
-                    for k in 0..3 {
-                        c[k] += frame.colour[i][k];
+                    for (acc, v) in c.iter_mut().zip(frame.colour[i]) {
+                        *acc += v;
                     }
                     if frame.depth[i].is_finite() {
                         hits += 1;
