@@ -16,12 +16,24 @@
 //! The tracer switches to its f64 path by itself once the pixel footprint is below 1e-5 of the
 //! eye's distance from the origin (zoom past about 1e3); shallower frames are traced on its
 //! f32 path, exact enough at that scale.
+//!
+//! **Deep frames.** That reference traces from the f64 camera, which past zoom ~1e13 cannot
+//! place the eye within a pixel (and past ~1e16 rounds the eye onto its target). A zoom frame
+//! whose camera is in the deep form ([`crate::zoom::ZoomPath::is_deep`]) is compared with
+//! [`Reference::deep_frame`] instead: `fathom_trace::deep::deep_frame`, the tracer's shading
+//! run in double-double from the frame's double-double eye with the exact target-relative
+//! orientation. It costs ~450 double-double steps a pixel, so it is rendered at most
+//! [`DEEP_REFERENCE_PIXELS`] pixels: the frame size divided by the smallest common divisor
+//! of width and height that brings it under that ([`deep_reduction`]), and the octree frame
+//! is reduced by the same factor ([`reduce`]: colour averaged over the block, a hit where at
+//! least half the block hits) before the comparison.
 
 use crate::error::RenderError;
 use crate::request::{Backend, RenderRequest};
 use crate::session::Session;
+use fathom_core::camera_path::CameraPath;
 use fathom_core::frame::Frame;
-use fathom_core::{Camera, Scene};
+use fathom_core::{Camera, Scene, Tape};
 use fathom_trace::post::{srgb, tonemap};
 use serde::Serialize;
 
@@ -149,11 +161,69 @@ pub fn agreement(a: &Frame, b: &Frame) -> Agreement {
     }
 }
 
+/// Most pixels of the double-double reference of a deep frame (80x60).
+pub const DEEP_REFERENCE_PIXELS: u32 = 80 * 60;
+
+/// The factor a `width` x `height` frame is reduced by for the double-double reference: the
+/// smallest common divisor of both sides that leaves at most [`DEEP_REFERENCE_PIXELS`]
+/// pixels (the largest common divisor if none does; 1 when the frame is small enough).
+pub fn deep_reduction(width: u32, height: u32) -> u32 {
+    let common =
+        (1..=width.min(height)).filter(|&f| width.is_multiple_of(f) && height.is_multiple_of(f));
+    let mut last = 1;
+    for f in common {
+        last = f;
+        if (width / f) as u64 * (height / f) as u64 <= DEEP_REFERENCE_PIXELS as u64 {
+            return f;
+        }
+    }
+    last
+}
+
+/// `frame` reduced by `f` (dividing both sides): each `f` x `f` block becomes a pixel whose
+/// colour is the block's mean, which is a hit (at the block's nearest depth) when at least
+/// half the block's pixels hit. A point-sampled reference pixel is then compared with what
+/// the block shows on the whole.
+pub fn reduce(frame: &Frame, f: u32) -> Frame {
+    if f == 1 {
+        return frame.clone();
+    }
+    let (w, h) = (frame.width / f, frame.height / f);
+    let mut out = Frame::new(w, h);
+    let n = (f * f) as f32;
+    for y in 0..h {
+        for x in 0..w {
+            let o = out.index(x, y);
+            let (mut c, mut hits, mut near) = ([0f32; 3], 0u32, f32::INFINITY);
+            for sy in 0..f {
+                for sx in 0..f {
+                    let i = frame.index(x * f + sx, y * f + sy);
+                    for (acc, v) in c.iter_mut().zip(frame.colour[i]) {
+                        *acc += v;
+                    }
+                    if frame.depth[i].is_finite() {
+                        hits += 1;
+                        near = near.min(frame.depth[i]);
+                    }
+                }
+            }
+            out.colour[o] = c.map(|v| v / n);
+            if 2 * hits >= f * f {
+                out.depth[o] = near;
+            }
+        }
+    }
+    out
+}
+
 /// The reference tracer: a session of [`reference_scene`] rendering with the CPU tracer at
-/// the size, SSAO and threads of an octree request.
+/// the size, SSAO and threads of an octree request; for deep frames the double-double
+/// reference of the same scene ([`Reference::deep_frame`]).
 pub struct Reference {
     session: Session,
     req: RenderRequest,
+    scene: Scene,
+    tape: Option<Tape>,
 }
 
 impl Reference {
@@ -162,15 +232,53 @@ impl Reference {
         let mut req = req.clone();
         req.backend = Backend::Trace;
         req.region = None;
+        let scene = reference_scene(scene);
         Ok(Reference {
-            session: Session::new(reference_scene(scene))?,
+            session: Session::new(scene.clone())?,
             req,
+            scene,
+            tape: None,
         })
     }
 
     /// The tracer's frame at `cam`.
     pub fn frame(&mut self, cam: &Camera) -> Result<Frame, RenderError> {
         Ok(self.session.render(cam, &self.req)?.frame)
+    }
+
+    /// The double-double reference of frame `i` of `frames` of the zoom `path` to `depth`
+    /// (field of view `fov`), at the request's size reduced by [`deep_reduction`], and that
+    /// factor; `None` for tours. The scene's fog (or the request's override) and SSAO apply.
+    pub fn deep_frame(
+        &mut self,
+        path: &CameraPath,
+        fov: f64,
+        i: usize,
+        frames: usize,
+        depth: f64,
+    ) -> Result<Option<(Frame, u32)>, RenderError> {
+        if self.tape.is_none() {
+            if let Some(fog) = self.req.fog {
+                self.scene.render.fog = fog;
+            }
+            self.tape = Some(Tape::compile(&self.scene).map_err(fathom_trace::TraceError::from)?);
+        }
+        let tape = self.tape.as_ref().expect("compiled above");
+        let (w, h) = (self.req.width, self.req.height);
+        let f = deep_reduction(w, h);
+        Ok(fathom_trace::deep::zoom_frame(
+            tape,
+            &self.scene,
+            path,
+            i,
+            frames,
+            depth,
+            fov,
+            w / f,
+            h / f,
+            self.req.ssao,
+        )
+        .map(|fr| (fr, f)))
     }
 }
 
@@ -190,6 +298,23 @@ mod tests {
             }
         }
         fr
+    }
+
+    #[test]
+    fn deep_reductions_divide_the_frame_under_the_budget() {
+        assert_eq!(deep_reduction(48, 36), 1);
+        assert_eq!(deep_reduction(80, 60), 1);
+        assert_eq!(deep_reduction(160, 120), 2);
+        assert_eq!(deep_reduction(640, 480), 8);
+        assert_eq!(deep_reduction(641, 480), 1);
+        // Half a block hit is a hit; colours are averaged.
+        let f = frame(4, 2, |x, _| (x == 0 || x == 3).then_some(1.0));
+        let r = reduce(&f, 2);
+        assert_eq!((r.width, r.height), (2, 1));
+        assert!(r.depth[0].is_finite() && r.depth[1].is_finite());
+        assert_eq!(r.colour[0], [0.5; 3]);
+        let g = frame(4, 2, |x, y| (x == 0 && y == 0).then_some(1.0));
+        assert!(!reduce(&g, 2).depth[0].is_finite());
     }
 
     #[test]

@@ -104,3 +104,63 @@ fn deep_octree_frames_match_the_double_double_tracer() {
         }
     }
 }
+
+#[test]
+fn zoom_comparisons_use_the_double_double_reference_when_deep() {
+    // A 30-frame zoom of the menger preset to 1e15 at 48x36, compared every 3 frames (and the
+    // last): frames whose camera is in the deep form must be compared with the double-double
+    // reference (full size at 48x36), shallow ones with the f64 tracer, and the deep ones must
+    // agree with it in silhouette.
+    use crate::request::{Backend, RenderRequest};
+    use crate::zoom::Zoom;
+    let p: ZoomPath = path_preset("menger").unwrap().into();
+    let z = Zoom {
+        depth: 1e15,
+        frames: 30,
+        request: RenderRequest {
+            width: 48,
+            height: 36,
+            threads: Some(2),
+            backend: Backend::Octree,
+            ..RenderRequest::default()
+        },
+        compare_every: 3,
+    };
+    let r = z.run(&p, false, |_, _, _, _| Ok(())).unwrap();
+    assert!(r.stopped.is_none(), "{:?}", r.stopped);
+    let mut deep = 0;
+    for c in &r.compare {
+        let (_, d) = p.deep_camera(c.frame, z.frames, z.depth);
+        eprintln!(
+            "frame {:2} zoom {:.1e}: {} reference (reduced {}), IoU {:.4}, SSIM {:.3}, colour error {:.4}, within {:.3}, largest voxel {:.2} px, {:.0} ms",
+            c.frame,
+            c.zoom,
+            c.reference,
+            c.reduced,
+            c.agreement.iou,
+            c.agreement.ssim,
+            c.agreement.colour_error,
+            c.agreement.colour_within,
+            c.largest_voxel_px,
+            c.trace_ms
+        );
+        let want = if p.is_deep(&d) {
+            "double-double"
+        } else {
+            "f64"
+        };
+        assert_eq!(c.reference, want, "frame {}", c.frame);
+        assert_eq!(c.reduced, 1);
+        if p.is_deep(&d) {
+            deep += 1;
+            assert!(
+                c.agreement.iou >= 0.98,
+                "frame {} (zoom {:e}): IoU {}",
+                c.frame,
+                c.zoom,
+                c.agreement.iou
+            );
+        }
+    }
+    assert!(deep >= 4, "only {deep} deep comparisons");
+}

@@ -5,9 +5,10 @@
 //! hands the finished frame (when frames are wanted) and its statistics to the caller. Every
 //! `compare_every`-th frame is also rendered by the sphere tracer at the same camera and the
 //! two compared ([`crate::compare`]): SSIM on luminance, silhouette IoU, colour error, and the
-//! largest visible voxel in pixels, with the frame's camera.
+//! largest visible voxel in pixels, with the frame's camera. Deep frames ([`ZoomPath::is_deep`])
+//! are compared with the double-double reference instead of the f64 tracer.
 
-use crate::compare::{Agreement, Reference, agreement};
+use crate::compare::{Agreement, Reference, agreement, reduce};
 use crate::error::RenderError;
 use crate::request::{Backend, RenderRequest};
 use crate::session::Session;
@@ -53,6 +54,13 @@ pub struct FrameComparison {
     pub agreement: Agreement,
     /// Milliseconds the tracer took (not part of the zoom's frame times).
     pub trace_ms: f64,
+    /// Which reference: `"f64"` (the CPU sphere tracer from the f64 camera) or
+    /// `"double-double"` (`fathom_trace::deep::deep_frame` from the double-double eye, for
+    /// deep frames: [`ZoomPath::is_deep`]).
+    pub reference: &'static str,
+    /// The factor both frames were reduced by for the comparison (1: full size; the
+    /// double-double reference is rendered at most [`crate::compare::DEEP_REFERENCE_PIXELS`]).
+    pub reduced: u32,
 }
 
 /// Why a zoom was refused.
@@ -267,6 +275,18 @@ impl ZoomPath {
         self.path.camera(i, frames, depth, self.fov)
     }
 
+    /// Whether a frame's camera from [`ZoomPath::deep_camera`] is in the deep form: a zoom
+    /// whose eye is within [`DEEP_VIEW`] of the target's largest coordinate (at least 1) of
+    /// its target. Such frames are compared with the double-double reference.
+    pub fn is_deep(&self, deep: &DeepEye) -> bool {
+        match &self.path {
+            CameraPath::Zoom { target, .. } => {
+                deep.scale <= DEEP_VIEW * target.abs().max_element().max(1.0)
+            }
+            _ => false,
+        }
+    }
+
     /// The camera of frame `i` with the eye to double-double precision, for the octree. Once
     /// the eye is closer to its target than a millionth of the target's coordinates, the f64
     /// camera's look direction (target minus a rounded eye) is off by more than 1e-10 rad and
@@ -285,7 +305,7 @@ impl ZoomPath {
         // `rel` is the camera in target-relative coordinates: its orientation is exact at any
         // depth (the f64 camera's is not once eye and target round to the same point).
         let dist = rel.eye.length();
-        if dist > 1e-6 * target.abs().max_element().max(1.0) {
+        if dist > DEEP_VIEW * target.abs().max_element().max(1.0) {
             return (
                 cam,
                 DeepEye {
@@ -308,6 +328,10 @@ impl ZoomPath {
         (cam, deep)
     }
 }
+
+/// Eye distance, relative to the target's largest coordinate (at least 1), below which a zoom
+/// frame's camera takes the deep form ([`ZoomPath::deep_camera`], [`ZoomPath::is_deep`]).
+pub const DEEP_VIEW: f64 = 1e-6;
 
 /// The zoom target along the ray from `eye` along unit `dir`: the surface point bracketed to
 /// f64 precision ([`surface_point`]), or, for estimators that never go inside along the ray,
@@ -429,14 +453,24 @@ impl Zoom {
                 session.step_octree_deep(&cam, &deep, &req, want_frames || compare_now)?;
             if let (true, Some(r), Some(f)) = (compare_now, reference.as_mut(), frame.as_ref()) {
                 let t0 = std::time::Instant::now();
-                let traced = r.frame(&cam)?;
+                let deep_ref = if preset.is_deep(&deep) {
+                    r.deep_frame(&preset.path, preset.fov, i, self.frames, self.depth)?
+                } else {
+                    None
+                };
+                let (agreement, reference, reduced) = match deep_ref {
+                    Some((traced, k)) => (agreement(&reduce(f, k), &traced), "double-double", k),
+                    None => (agreement(f, &r.frame(&cam)?), "f64", 1),
+                };
                 compare.push(FrameComparison {
                     frame: i,
                     zoom: z,
                     camera: cam.clone(),
                     largest_voxel_px: st.largest_voxel_px,
-                    agreement: agreement(f, &traced),
+                    agreement,
                     trace_ms: t0.elapsed().as_secs_f64() * 1e3,
+                    reference,
+                    reduced,
                 });
             }
             if i == 0

@@ -28,11 +28,22 @@
 //! The march is generic over [`Real`] ([`march_depths`]) so the same rule can run in f64, which
 //! is how the tests show what double-double buys. Rows run in parallel (rayon).
 //! [`zoom_frame_depths`] is the reference for frame `i` of a zoom path.
+//!
+//! **Shaded.** [`deep_frame`] colours each hit as the ordinary tracer does, with the same
+//! code run in double-double ([`crate::shade::shade_hits`], [`crate::render::post_params`]):
+//! normals, materials, AO, lights (soft shadows when the scene has them), sky, fog. At shallow
+//! views it matches the tracer's frame (mean display-colour difference below 0.01); past
+//! double precision it is the only valid reference for the colours of deep frames
+//! ([`zoom_frame`]).
 
+use crate::post;
+use crate::render::post_params;
+use crate::shade::{Shaded, Shading, shade_hits};
 use fathom_core::camera_path::CameraPath;
 use fathom_core::dd::{Dd, dd3};
+use fathom_core::frame::{Frame, NO_ID, Rect};
 use fathom_core::real::Real;
-use fathom_core::{Camera, Evaluator, Tape, V3};
+use fathom_core::{Camera, Evaluator, Scene, Tape, V3};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -132,7 +143,7 @@ pub fn march_depths<S: Real>(
             (0..width)
                 .map(|x| {
                     let dir = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, width, height);
-                    march_ray(ev, tape, eye, dir, pixel_angle, opts)
+                    march_ray(ev, tape, eye, dir, pixel_angle, opts).0
                 })
                 .collect()
         })
@@ -140,7 +151,7 @@ pub fn march_depths<S: Real>(
     rows.into_iter().flatten().collect()
 }
 
-/// One ray of [`march_depths`].
+/// One ray of [`march_depths`]: the hit distance and the distance evaluations spent.
 fn march_ray<S: Real>(
     ev: &mut Evaluator<S>,
     tape: &Tape,
@@ -148,9 +159,9 @@ fn march_ray<S: Real>(
     dir: DVec3,
     pixel_angle: f64,
     opts: &DeepOptions,
-) -> Option<f64> {
+) -> (Option<f64>, u32) {
     let mut t = 0.0f64;
-    for _ in 0..opts.max_steps {
+    for step in 1..=opts.max_steps {
         let ts = S::splat(t);
         let p = V3::new(
             eye.x + ts * S::splat(dir.x),
@@ -159,18 +170,117 @@ fn march_ray<S: Real>(
         );
         let d = ev.distance(tape, p).lane(0);
         if d.is_nan() || d <= 0.0 {
-            return Some(t);
+            return (Some(t), step);
         }
         let footprint = pixel_angle * t.max(opts.near);
         if d < opts.hit_footprints * footprint {
-            return Some(t);
+            return (Some(t), step);
         }
         t += d.min(opts.step_footprints * footprint);
         if t > opts.far {
-            return None;
+            return (None, step);
         }
     }
-    None
+    (None, opts.max_steps)
+}
+
+/// The shaded reference image: per pixel the march of [`deep_depths`] in double-double from
+/// `eye`, then the tracer's colouring of the hit in double-double ([`shade_hits`] with the
+/// tracer's [`Shading`] of `scene`'s lights and render settings, AO reach from `view_scale`,
+/// the eye's distance to what it looks at), the tracer's sky for misses, and the tracer's
+/// post effects ([`post_params`]: the scene's fog, SSAO of `ssao`). `scene` is what the
+/// comparison wants drawn (the zoom's reference turns soft shadows off; a scene with them on
+/// gets them, marched in double-double too). `camera` gives only the orientation and field of
+/// view, as for [`deep_depths`]. Depths are those of [`deep_depths`] (f32, infinite for a
+/// miss); steps are the march's distance evaluations.
+#[allow(clippy::too_many_arguments)]
+pub fn deep_frame(
+    tape: &Tape,
+    scene: &Scene,
+    eye: V3<Dd>,
+    camera: &Camera,
+    view_scale: f64,
+    width: u32,
+    height: u32,
+    opts: &DeepOptions,
+    ssao: f32,
+) -> Frame {
+    let frame = camera.frame();
+    let pixel_angle = frame.pixel_angle(height);
+    let mut shading = Shading::new(tape, &scene.render, &scene.lights, view_scale);
+    // The tracer's floor (1e-12) is for views of size ~1; past zoom 1e10 it would exceed the
+    // pixel footprint and blur the normals, so it scales with the view here.
+    shading.min_length = 1e-12 * view_scale.min(1.0);
+    let rows: Vec<Vec<(Option<f64>, u32, Shaded)>> = (0..height)
+        .into_par_iter()
+        .map_init(Evaluator::<Dd>::new, |ev, y| {
+            (0..width)
+                .map(|x| {
+                    let dir = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, width, height);
+                    let (t, steps) = march_ray(ev, tape, eye, dir, pixel_angle, opts);
+                    let mut out = [Shaded {
+                        id: NO_ID,
+                        ..Shaded::default()
+                    }];
+                    match t {
+                        Some(t) => {
+                            let d = V3::new(Dd::from(dir.x), Dd::from(dir.y), Dd::from(dir.z));
+                            shade_hits(
+                                ev,
+                                &shading,
+                                eye,
+                                d,
+                                Dd::from(t),
+                                pixel_angle,
+                                true,
+                                &mut out,
+                            );
+                        }
+                        None => out[0].colour = shading.sky([dir.x, dir.y, dir.z]),
+                    }
+                    (t, steps, out[0])
+                })
+                .collect()
+        })
+        .collect();
+    let mut img = Frame::new(width, height);
+    for (i, (t, steps, s)) in rows.into_iter().flatten().enumerate() {
+        img.colour[i] = s.colour;
+        img.steps[i] = steps;
+        if let Some(t) = t {
+            img.depth[i] = t as f32;
+            img.normal[i] = s.normal;
+            img.id[i] = s.id;
+        }
+    }
+    let all = Rect::full(width, height);
+    let post = post_params(&scene.render, ssao, pixel_angle, false, 1);
+    post::finish_view(img, all, all, &post)
+}
+
+/// The shaded reference of frame `i` of `frames` of a zoom `path` to `depth` (vertical field
+/// of view `fov` degrees) of `scene`: [`deep_frame`] from the frame's double-double eye with the
+/// exact orientation of [`CameraPath::deep_camera`], options [`DeepOptions::for_scale`] of the
+/// eye's distance to the target. `None` for tours.
+#[allow(clippy::too_many_arguments)]
+pub fn zoom_frame(
+    tape: &Tape,
+    scene: &Scene,
+    path: &CameraPath,
+    i: usize,
+    frames: usize,
+    depth: f64,
+    fov: f64,
+    width: u32,
+    height: u32,
+    ssao: f32,
+) -> Option<Frame> {
+    let (eye, cam) = path.deep_camera(i, frames, depth, fov)?;
+    let scale = cam.eye.length();
+    let opts = DeepOptions::for_scale(scale);
+    Some(deep_frame(
+        tape, scene, eye, &cam, scale, width, height, &opts, ssao,
+    ))
 }
 
 /// The double-double eye of an f64 camera, for shallow views.

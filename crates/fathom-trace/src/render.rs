@@ -28,12 +28,12 @@
 
 use crate::post::{self, PostParams};
 use crate::prepass::{self, StartGrid, View};
-use crate::shade::{Shaded, Shading, shade};
+use crate::shade::{Shaded, Shading, shade_hits};
 use crate::tracer::{MarchParams, Method, OMEGA, march};
 use fathom_core::camera::{CameraError, ProjectionError};
 use fathom_core::frame::{Frame, NO_ID, Rect};
 use fathom_core::real::{Mask, Real};
-use fathom_core::scene::SceneError;
+use fathom_core::scene::{RenderSettings, SceneError};
 use fathom_core::tape::CompileError;
 use fathom_core::{Camera, Evaluator, F32x8, Projection, Scene, Tape, V3};
 use rayon::prelude::*;
@@ -338,17 +338,13 @@ pub fn render_tape(
     let footprint = pixel_angle * (camera.target - camera.eye).length();
     let deep = footprint < DEEP_FOOTPRINT * camera.eye.length().max(1.0);
     let ssao = opts.ssao > 0.0 && !opts.geometry_only && projection.screen_space();
-    let post = PostParams {
-        ssao: if ssao { opts.ssao } else { 0.0 },
-        pixel_angle: pixel_angle as f32,
-        fog: if opts.geometry_only {
-            0.0
-        } else {
-            r.fog as f32
-        },
-        fog_colour: r.sky_bottom.map(|c| c as f32),
-        supersample: ss,
-    };
+    let post = post_params(
+        r,
+        if ssao { opts.ssao } else { 0.0 },
+        pixel_angle,
+        opts.geometry_only,
+        ss,
+    );
     // Per eye: the region's pixels in that eye's view, the samples they need, and the tiles
     // that hold those samples (grown by the reach of SSAO).
     let margin = if ssao { post::SSAO_REACH } else { 0 };
@@ -427,6 +423,25 @@ pub fn render_tape(
     stats.height = out.height;
     stats.ms_total = start.elapsed().as_secs_f64() * 1e3;
     Ok((out, stats))
+}
+
+/// The post effects the tracer runs on a view of a scene with render settings `r`: SSAO of
+/// `ssao` (0: none), the scene's fog unless `geometry_only`, `supersample` samples per axis.
+/// Shared with the double-double reference ([`crate::deep::deep_frame`]).
+pub fn post_params(
+    r: &RenderSettings,
+    ssao: f32,
+    pixel_angle: f64,
+    geometry_only: bool,
+    supersample: u32,
+) -> PostParams {
+    PostParams {
+        ssao,
+        pixel_angle: pixel_angle as f32,
+        fog: if geometry_only { 0.0 } else { r.fog as f32 },
+        fog_colour: r.sky_bottom.map(|c| c as f32),
+        supersample,
+    }
 }
 
 /// `r` rounded out to whole tiles of a `w` x `h` view (tiles start at multiples of [`TILE`]).
@@ -683,8 +698,16 @@ fn tile<S: Real>(
         let origin = lanes3(&o);
         let tv = S::from_lanes(&t[..S::LANES]);
         let live = S::from_lanes(&live[..S::LANES]).lt(S::splat(0.5));
-        let footprint = tv * S::splat(ctx.pixel_angle);
-        out.de_shade += shade(ev, shading, origin, dir, tv, footprint, live, &mut shaded);
+        out.de_shade += shade_hits(
+            ev,
+            shading,
+            origin,
+            dir,
+            tv,
+            ctx.pixel_angle,
+            live,
+            &mut shaded,
+        );
         out.shadow_rays += (packet.len() * shading.lights.iter().filter(|l| l.2).count()) as u64;
         for (l, &(k, _, _, _)) in packet.iter().enumerate() {
             out.colour[k] = shaded[l].colour;

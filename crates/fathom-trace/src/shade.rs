@@ -25,6 +25,10 @@ pub struct Shading<'a> {
     pub ao_range: f64,
     /// Shadow rays stop beyond this distance.
     pub shadow_max: f64,
+    /// Floor of the lengths shading divides by or offsets with (normal offset, shadow-ray
+    /// penumbra terms), world units: 1e-12 for the tracer; the double-double reference, whose
+    /// views may be far smaller, scales it with the view ([`crate::deep::deep_frame`]).
+    pub min_length: f64,
 }
 
 impl<'a> Shading<'a> {
@@ -48,6 +52,7 @@ impl<'a> Shading<'a> {
                 .collect(),
             ao_range: 0.05 * view_scale,
             shadow_max: render.max_distance,
+            min_length: 1e-12,
         }
     }
 
@@ -86,7 +91,7 @@ pub fn shade<S: Real>(
     let one = S::one();
     let p = origin + dir * t;
     let v = ev.eval(tape, p);
-    let h = footprint.max(S::splat(1e-12));
+    let h = footprint.max(S::splat(sh.min_length));
     let n = ev.normal(tape, p, h * S::splat(0.5));
     let mut evals = 5 * S::LANES as u64;
 
@@ -178,6 +183,24 @@ pub fn shade<S: Real>(
     evals
 }
 
+/// Shades primary-ray hits at `origin + dir * t` as the tracer does: [`shade`] with the pixel
+/// footprint `t * pixel_angle`. Shared by the tracer's tiles and the double-double reference
+/// ([`crate::deep::deep_frame`]), so both colour a hit alike.
+#[allow(clippy::too_many_arguments)]
+pub fn shade_hits<S: Real>(
+    ev: &mut Evaluator<S>,
+    sh: &Shading,
+    origin: V3<S>,
+    dir: V3<S>,
+    t: S,
+    pixel_angle: f64,
+    live: S::Mask,
+    out: &mut [Shaded],
+) -> u64 {
+    let footprint = t * S::splat(pixel_angle);
+    shade(ev, sh, origin, dir, t, footprint, live, out)
+}
+
 /// Soft-shadow factor in [0, 1] along `l` from `ro` (Aaltonen's improved penumbra estimate).
 /// `eps` is the primary hit's pixel footprint: per Keinert et al., a shadow ray needs no more
 /// precision than the pixel it shades, so it counts as blocked below that distance.
@@ -215,10 +238,10 @@ fn soft_shadow<S: Real>(
         let far = y0.ge(hp);
         let y = S::select(far, zero, y0);
         let d = S::select(far, hp, (hp * hp - y * y).max(zero).sqrt());
-        let est = k * d / (t - y).max(S::splat(1e-12));
+        let est = k * d / (t - y).max(S::splat(sh.min_length));
         let blocked = h.lt(eps * S::splat(0.25));
         res = S::select(active, S::select(blocked, zero, res.min(est)), res);
-        ph = S::select(active, hp.max(S::splat(1e-12)), ph);
+        ph = S::select(active, hp.max(S::splat(sh.min_length)), ph);
         t = S::select(active, t + hp.max(eps), t);
         active = active & !blocked & res.gt(S::splat(1e-3)) & t.lt(t_max) & h.is_finite();
     }

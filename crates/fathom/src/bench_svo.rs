@@ -538,6 +538,8 @@ mod tests {
                 colour_within: 1.0,
             },
             trace_ms: 0.0,
+            reference: "f64",
+            reduced: 1,
         };
         let r = ZoomReport {
             preset: "p".into(),

@@ -261,3 +261,115 @@ fn mandelbulb_zoom_frames_find_the_target_at_any_depth() {
         }
     }
 }
+
+/// Display value (tonemapped, sRGB-encoded, 0..1) of a linear channel, as the comparisons see it.
+fn display(x: f32) -> f64 {
+    crate::post::srgb(crate::post::tonemap(x)) as f64
+}
+
+/// Silhouette IoU of two frames, and over the pixels both hit the mean display-colour
+/// difference per channel and the largest.
+fn frame_agreement(a: &Frame, b: &Frame) -> (f64, f64, f64) {
+    let (mut inter, mut union, mut sum, mut worst) = (0usize, 0usize, 0.0, 0.0f64);
+    for i in 0..a.len() {
+        let (ha, hb) = (a.depth[i].is_finite(), b.depth[i].is_finite());
+        union += (ha || hb) as usize;
+        if ha && hb {
+            inter += 1;
+            let d: [f64; 3] =
+                std::array::from_fn(|k| (display(a.colour[i][k]) - display(b.colour[i][k])).abs());
+            sum += d.iter().sum::<f64>() / 3.0;
+            worst = worst.max(d.iter().cloned().fold(0.0, f64::max));
+        }
+    }
+    let iou = if union == 0 {
+        1.0
+    } else {
+        inter as f64 / union as f64
+    };
+    (iou, sum / inter.max(1) as f64, worst)
+}
+
+/// Over all pixels (sky included), the mean display-colour difference per channel.
+fn mean_colour_difference(a: &Frame, b: &Frame) -> f64 {
+    let s: f64 = (0..a.len())
+        .map(|i| {
+            (0..3)
+                .map(|k| (display(a.colour[i][k]) - display(b.colour[i][k])).abs())
+                .sum::<f64>()
+                / 3.0
+        })
+        .sum();
+    s / a.len() as f64
+}
+
+#[test]
+fn shallow_shaded_frames_match_the_ordinary_tracer() {
+    // The shaded reference at the presets' own cameras against the ordinary tracer's frame
+    // (f32 packets, its defaults: prepass, enhanced steps, soft shadows as the scene says).
+    // The two marches stop at slightly different points of the same pixel (the tracer's
+    // over-relaxed steps against half-footprint steps: depths differ by up to ~5 %), so
+    // normals taken one footprint wide differ a little where the surface is rough.
+    let mut results = Vec::new();
+    for name in ["menger", "mandelbulb"] {
+        let scene = presets::load(name).unwrap();
+        let cam = scene.camera.clone();
+        let tape = Tape::compile(&scene).unwrap();
+        let scale = (cam.target - cam.eye).length();
+        let opts = DeepOptions::for_scale(scale);
+        let deep = deep_frame(&tape, &scene, eye_of(&cam), &cam, scale, W, H, &opts, 0.0);
+        let tracer_opts = Options {
+            width: W,
+            height: H,
+            ..Options::default()
+        };
+        let (ordinary, _) =
+            render_tape(&tape, &scene, &cam, &tracer_opts, None, Hooks::NONE).unwrap();
+        let (iou, hit_err, worst) = frame_agreement(&deep, &ordinary);
+        let all_err = mean_colour_difference(&deep, &ordinary);
+        eprintln!(
+            "{name} shaded: IoU {iou:.4}; colour difference over common hits mean {hit_err:.4} (worst channel {worst:.3}), over all pixels {all_err:.4}"
+        );
+        results.push((name, iou, hit_err, all_err));
+    }
+    for (name, iou, hit_err, all_err) in results {
+        assert!(iou >= 0.99, "{name}: IoU {iou}");
+        assert!(
+            hit_err < 0.02,
+            "{name}: mean colour difference {hit_err} over hits"
+        );
+        assert!(all_err < 0.01, "{name}: mean colour difference {all_err}");
+    }
+}
+
+#[test]
+fn menger_corner_shaded_frames_are_self_similar() {
+    // The corner views of `menger_corner_zooms_are_self_similar_in_dd_only` at 3^5 and 3^26,
+    // shaded (soft shadows off, as the zoom's reference has them: a shadow ray's reach is the
+    // scene's max distance, not a multiple of the view, so shadows are not self-similar).
+    // Normals, AO, lights, orbit-trap palette and sky are. Before the shading's length floor
+    // scaled with the view (`Shading::min_length`), the 3^26 view's normals were taken 1e-12
+    // wide, a hundred pixels: mean colour difference 0.078.
+    let (n0, k0, k) = (10u32, 5i32, 26i32);
+    let shade = |k: i32| {
+        let v = corner_view(k);
+        let mut scene = scenes::menger(n0 + (k - k0) as u32);
+        for l in &mut scene.lights {
+            l.shadows = false;
+        }
+        let tape = Tape::compile(&scene).unwrap();
+        let scale = v.opts.near * 100.0;
+        deep_frame(&tape, &scene, v.eye, &v.camera, scale, W, H, &v.opts, 0.0)
+    };
+    let (reference, zoomed) = (shade(k0), shade(k));
+    let (iou, hit_err, worst) = frame_agreement(&zoomed, &reference);
+    let all_err = mean_colour_difference(&zoomed, &reference);
+    eprintln!(
+        "menger corner 3^{k} against 3^{k0} shaded: IoU {iou:.4}; colour difference over common hits mean {hit_err:.2e} (worst channel {worst:.2e}), over all pixels {all_err:.2e}"
+    );
+    let hit_px = reference.depth.iter().filter(|d| d.is_finite()).count();
+    assert!(hit_px > (W * H) as usize / 2, "{hit_px} hits");
+    assert!(iou >= 0.99, "IoU {iou}");
+    assert!(hit_err < 0.01, "mean colour difference {hit_err}");
+    assert!(worst < 0.05, "worst channel difference {worst}");
+}
