@@ -6,7 +6,7 @@ use crate::zoom::ZoomPath;
 use fathom_core::Tape;
 use fathom_core::camera_path::path_preset;
 use fathom_svo::{DeepEye, Explorer, ExplorerConfig, RootSpec};
-use fathom_trace::deep::{DeepOptions, deep_depths, silhouette_iou};
+use fathom_trace::deep::{silhouette_iou, zoom_frame_depths};
 
 /// The octree's depths (None: sky) of the zoom's frame at `zoom`, settled.
 fn octree_depths(p: &ZoomPath, zoom: f64, w: u32, h: u32) -> (Vec<Option<f64>>, u8, DeepEye) {
@@ -51,10 +51,8 @@ fn octree_depths(p: &ZoomPath, zoom: f64, w: u32, h: u32) -> (Vec<Option<f64>>, 
 /// Silhouette IoU and the median and 90th percentile of `|octree - tracer| / tracer` over the
 /// pixels both hit, of the zoom's frame at `zoom`; also the anchor depth.
 fn agreement(p: &ZoomPath, tape: &Tape, zoom: f64, (w, h): (u32, u32)) -> (f64, f64, f64, u8) {
-    let (svo, anchor, deep) = octree_depths(p, zoom, w, h);
-    let (_, cam) = p.path.deep_camera(1, 2, zoom, p.fov).unwrap();
-    let eye = p.path.eye_dd(1, 2, zoom).unwrap();
-    let traced = deep_depths(tape, eye, &cam, w, h, &DeepOptions::for_scale(deep.scale));
+    let (svo, anchor, _) = octree_depths(p, zoom, w, h);
+    let traced = zoom_frame_depths(tape, &p.path, 1, 2, zoom, p.fov, w, h).unwrap();
     let mut rel: Vec<f64> = svo
         .iter()
         .zip(&traced)

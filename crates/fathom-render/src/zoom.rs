@@ -18,6 +18,7 @@ use fathom_core::Tape;
 use fathom_core::camera_path::{
     CameraPath, ExactCube, PathPreset, surface_point, target_tail, view_target,
 };
+use fathom_core::dd::to_dvec3;
 use fathom_core::frame::Frame;
 use fathom_svo::stats::Summary;
 use fathom_svo::{DeepEye, FrameStats, Traversal};
@@ -295,7 +296,7 @@ impl ZoomPath {
     /// part and the true distance to the target.
     pub fn deep_camera(&self, i: usize, frames: usize, depth: f64) -> (Camera, DeepEye) {
         let cam = self.camera(i, frames, depth);
-        let (CameraPath::Zoom { target, dir, .. }, Some((eye, rel))) = (
+        let (CameraPath::Zoom { dir, .. }, Some((eye, rel))) = (
             &self.path,
             self.path.deep_camera(i, frames, depth, self.fov),
         ) else {
@@ -304,17 +305,14 @@ impl ZoomPath {
         };
         // `rel` is the camera in target-relative coordinates: its orientation is exact at any
         // depth (the f64 camera's is not once eye and target round to the same point).
-        let dist = rel.eye.length();
-        if dist > DEEP_VIEW * target.abs().max_element().max(1.0) {
-            return (
-                cam,
-                DeepEye {
-                    eye_lo: DVec3::ZERO,
-                    scale: dist,
-                },
-            );
+        let shallow = DeepEye {
+            eye_lo: DVec3::ZERO,
+            scale: rel.eye.length(),
+        };
+        if !self.is_deep(&shallow) {
+            return (cam, shallow);
         }
-        let hi = DVec3::new(eye.x.hi, eye.y.hi, eye.z.hi);
+        let hi = to_dvec3(eye);
         let cam = Camera {
             eye: hi,
             target: hi - *dir,
@@ -323,7 +321,7 @@ impl ZoomPath {
         };
         let deep = DeepEye {
             eye_lo: DVec3::new(eye.x.lo, eye.y.lo, eye.z.lo),
-            scale: dist,
+            scale: shallow.scale,
         };
         (cam, deep)
     }

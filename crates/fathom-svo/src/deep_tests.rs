@@ -7,7 +7,7 @@ use crate::explorer::{DeepEye, Explorer, ExplorerConfig, SvoImage, Traversal};
 use crate::root::MENGER_CUBE;
 use fathom_core::Camera;
 use fathom_core::camera_path::path_preset;
-use fathom_core::dd::Dd;
+use fathom_core::dd::to_dvec3;
 use glam::DVec3;
 
 fn cfg(w: u32, h: u32) -> ExplorerConfig {
@@ -20,29 +20,22 @@ fn cfg(w: u32, h: u32) -> ExplorerConfig {
     }
 }
 
-/// The Menger zoom preset's camera at zoom `z` (any depth): the eye `(1,1,1) + dir * 1.5 / z`
-/// in double-double, looking along `-dir`.
+/// The Menger zoom preset's camera at zoom `z` (any depth): the path's double-double eye
+/// `(1,1,1) + dir * 1.5 / z` (`CameraPath::eye_dd`), looking along `-dir` with the
+/// target-relative camera's exact orientation.
 fn menger_camera(z: f64) -> (Camera, DeepEye) {
     let p = path_preset("menger").unwrap();
-    let fathom_core::camera_path::CameraPath::Zoom {
-        target, dir, start, ..
-    } = p.path
-    else {
-        unreachable!()
-    };
-    let dist = start / z;
-    let eye: [Dd; 3] =
-        std::array::from_fn(|a| Dd::from(target[a]) + Dd::from(dir[a]) * Dd::from(dist));
-    let hi = DVec3::new(eye[0].hi, eye[1].hi, eye[2].hi);
+    let (eye, rel) = p.path.deep_camera(1, 2, z, p.fov).unwrap();
+    let hi = to_dvec3(eye);
     let cam = Camera {
         eye: hi,
-        target: hi - dir,
-        up: DVec3::Y,
-        fov: p.fov,
+        target: hi - rel.eye.normalize(),
+        up: rel.up,
+        fov: rel.fov,
     };
     let deep = DeepEye {
-        eye_lo: DVec3::new(eye[0].lo, eye[1].lo, eye[2].lo),
-        scale: dist,
+        eye_lo: DVec3::new(eye.x.lo, eye.y.lo, eye.z.lo),
+        scale: rel.eye.length(),
     };
     (cam, deep)
 }
@@ -66,11 +59,15 @@ fn render(ex: &mut Explorer, cam: &Camera, deep: &DeepEye, t: Traversal) -> SvoI
     img
 }
 
-fn iou(a: &SvoImage, b: &SvoImage) -> f64 {
-    let (ma, mb) = (a.mask(), b.mask());
-    let inter = ma.iter().zip(&mb).filter(|(x, y)| **x && **y).count();
-    let union = ma.iter().zip(&mb).filter(|(x, y)| **x || **y).count();
+/// Silhouette intersection over union of two hit masks.
+fn mask_iou(a: &[bool], b: &[bool]) -> f64 {
+    let inter = a.iter().zip(b).filter(|(x, y)| **x && **y).count();
+    let union = a.iter().zip(b).filter(|(x, y)| **x || **y).count();
     inter as f64 / union.max(1) as f64
+}
+
+fn iou(a: &SvoImage, b: &SvoImage) -> f64 {
+    mask_iou(&a.mask(), &b.mask())
 }
 
 /// Mean absolute difference of the colour channels over pixels both images hit, in [0, 1].
@@ -147,12 +144,7 @@ fn menger_frames_whole_powers_of_three_apart_show_the_same_corner() {
     let (base, a0) = settled(z0);
     assert_eq!(a0, 0, "zoom {z0} renders in root units");
     let traced = crate::outline::trace_mask(&scene, &menger_camera(z0).0, w, h, 0.3).unwrap();
-    let tracer_iou = |img: &SvoImage| {
-        let m = img.mask();
-        let inter = m.iter().zip(&traced).filter(|(a, b)| **a && **b).count();
-        let union = m.iter().zip(&traced).filter(|(a, b)| **a || **b).count();
-        inter as f64 / union.max(1) as f64
-    };
+    let tracer_iou = |img: &SvoImage| mask_iou(&img.mask(), &traced);
     // How far two root-unit frames a power of 3 apart differ in colour: the dyadic voxel grid
     // does not scale with the sponge's 1/3, so voxels straddle hole edges differently.
     let (shallow, _) = settled(z0 * 3.0);
