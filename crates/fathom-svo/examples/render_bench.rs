@@ -2,7 +2,8 @@
 //! subdivisions per frame, no time budget), then times the render phase alone at chosen frames
 //! (min and median of repeated renders of the same frozen tree) and prints an image checksum.
 //!
-//! `cargo run --release -p fathom-svo --example render_bench -- mandelbulb 300 1e11 [threads]`
+//! `cargo run --release -p fathom-svo --example render_bench -- mandelbulb 300 1e11 [threads]
+//! [neighbour|kdrestart] [beam tile side, 0 for none]`
 
 use fathom_core::camera_path::path_preset;
 use fathom_svo::RootSpec;
@@ -30,6 +31,10 @@ fn main() {
         min_subdivisions: 1700,
         root: RootSpec::from_cube(p.cube),
         traversal: trav,
+        beam: args
+            .get(6)
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(fathom_svo::explorer::DEFAULT_BEAM),
         ..ExplorerConfig::default()
     };
     let mut ex = Explorer::new(&p.scene, cfg).unwrap();

@@ -64,6 +64,9 @@ pub struct Hit {
     pub node: u32,
     /// Nodes stepped through (descents, ascents and neighbour steps, plus one).
     pub steps: u32,
+    /// Depth of the node hit (its side is [`dim_at`] of it; 0 for a miss), so the caller
+    /// need not load the node again.
+    pub depth: u8,
 }
 
 impl Hit {
@@ -73,6 +76,7 @@ impl Hit {
             colour: 0,
             node: NONE,
             steps,
+            depth: 0,
         }
     }
 
@@ -240,6 +244,7 @@ fn stop_here(
         colour: n.colour,
         node: id,
         steps,
+        depth: b.depth,
     })
 }
 
@@ -333,6 +338,7 @@ fn walk(
                     colour: n.colour,
                     node: id,
                     steps,
+                    depth: b.depth,
                 };
             }
             let o = b.octant_of(p);
@@ -425,6 +431,7 @@ pub fn cast_kdrestart(tree: &Octree, r: &Ray, eye_inside: bool, reqs: &mut Vec<R
                     colour: n.colour,
                     node: id,
                     steps,
+                    depth: b.depth,
                 };
             }
             let o = b.octant_of(p);
