@@ -105,10 +105,16 @@ pub fn free_children(tree: &mut Octree, r: u32, rb: Cell) {
     }
 }
 
-/// Unloads every brick not visited since the last call (except those shallower than
-/// `keep_levels`): each becomes one full leaf with its average colour. Clears the visited
-/// flags of the bricks kept. Returns how many bricks were unified.
-pub fn unify(tree: &mut Octree, keep_levels: u8) -> usize {
+/// Unloads every brick that has gone unvisited by `idle_limit` calls in a row, this one
+/// included (1: not visited since the last call), except those shallower than `keep_levels`:
+/// each becomes one full leaf with its average colour. Clears the visited flags of the bricks
+/// kept. Returns how many bricks were unified.
+///
+/// Why not always 1: a zoom uncovers, through the holes of the near geometry, background it
+/// saw a few frames before; unloaded at once, that background came back at the coarsest kept
+/// level, voxels hundreds of pixels wide (Menger to 1e15, 300 frames, 640x480: median largest
+/// visible voxel 70 px when unloading after 4 frames unseen, 25 px after 16).
+pub fn unify(tree: &mut Octree, keep_levels: u8, idle_limit: u8) -> usize {
     let mut unified = 0;
     let mut stack = vec![(0u32, Cell::ROOT)];
     while let Some((x, xb)) = stack.pop() {
@@ -120,7 +126,14 @@ pub fn unify(tree: &mut Octree, keep_levels: u8) -> usize {
             continue;
         }
         if tree.is_brick_depth(xb.depth) {
-            if xb.depth >= keep_levels && flags & VISITED == 0 {
+            let n = &mut tree.nodes[x as usize];
+            n.idle = if flags & VISITED == 0 {
+                n.idle.saturating_add(1)
+            } else {
+                0
+            };
+            if xb.depth >= keep_levels && n.idle >= idle_limit.max(1) {
+                n.idle = 0;
                 free_children(tree, x, xb);
                 tree.nodes[x as usize].clear_flags(EMPTY);
                 unified += 1;

@@ -671,9 +671,16 @@ impl Explorer {
         }
     }
 
-    /// Phase 3: unloads unvisited bricks; returns how many.
+    /// Phase 3: unloads every brick not visited since the last unification; returns how
+    /// many. (A frame's own unification, [`Explorer::step`], keeps bricks until they have gone
+    /// unvisited [`IDLE_UNIFICATIONS`] times, unless memory runs short.)
     pub fn unify(&mut self) -> usize {
-        let n = unify(&mut self.tree, self.cfg.keep_levels);
+        self.unify_idle(1)
+    }
+
+    /// Unloads the bricks that have gone unvisited by `idle_limit` unifications in a row.
+    fn unify_idle(&mut self, idle_limit: u8) -> usize {
+        let n = unify(&mut self.tree, self.cfg.keep_levels, idle_limit);
         if let Some((id, b)) = self.skip
             && (self.tree.nodes[id as usize].is_free()
                 || self.tree.nodes[id as usize].depth != b.depth)
@@ -700,10 +707,10 @@ impl Explorer {
         let subdivide_ms = t1.elapsed().as_secs_f64() * 1e3;
         let t2 = Instant::now();
         let pressure = self.tree.counts().nodes as f64 > 0.9 * self.tree.max_nodes as f64;
-        let unified = if pressure
-            || self.frame % self.cfg.unify_every as u64 == self.cfg.unify_every as u64 - 1
-        {
-            self.unify() as u64
+        let unified = if pressure {
+            self.unify_idle(1) as u64
+        } else if self.frame % self.cfg.unify_every as u64 == self.cfg.unify_every as u64 - 1 {
+            self.unify_idle(IDLE_UNIFICATIONS) as u64
         } else {
             0
         };
@@ -762,6 +769,10 @@ pub fn order_requests(reqs: &mut [Request]) {
             .then(a.id.cmp(&b.id))
     });
 }
+
+/// A frame's unification unloads a brick once this many unifications in a row found it
+/// unvisited (16 frames at the default period of 4; see [`crate::evict::unify`]).
+pub const IDLE_UNIFICATIONS: u8 = 4;
 
 /// What one subdivision on a deep frame (double-double evaluation) counts towards
 /// [`ExplorerConfig::min_subdivisions`]: `fathom bench eval` measures double-double evaluation

@@ -470,6 +470,7 @@ pub fn apply(tree: &mut Octree, r: &Children) -> Outcome {
         c.parent = id;
         c.depth = depth;
         c.brick = if brick_here { cid } else { parent_brick };
+        c.idle = 0;
         let full = r.full >> o & 1 == 1;
         c.colour = if full { r.colours[o as usize] } else { 0 };
         // New nodes count as visited so the next unification does not unload them unseen.

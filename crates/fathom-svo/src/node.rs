@@ -15,7 +15,8 @@
 //! | `colour`     | 4     | RGBA8; inner nodes hold the average of their full children   |
 //! | `depth`      | 1     | level below the root (box size is `2^-depth` of the root)     |
 //! | `flags`      | 1     | empty / requested / visited / free                            |
-//! | padding      | 2     |                                                               |
+//! | `idle`       | 1     | unifications a brick has gone unvisited (unloaded at a limit) |
+//! | padding      | 1     |                                                               |
 //!
 //! The dissertation's Java node was 26 bytes of fields (plus JVM headers and one object per
 //! child array); positions are not stored: boxes are recomputed exactly from the depth during
@@ -57,7 +58,10 @@ pub struct Node {
     pub depth: u8,
     /// [`EMPTY`], [`REQUESTED`], [`VISITED`], [`FREE`].
     pub flags: AtomicU8,
-    _pad: [u8; 2],
+    /// Brick representatives: unifications in a row that found the brick unvisited (see
+    /// [`crate::evict::unify`]); changed only between render phases.
+    pub idle: u8,
+    _pad: [u8; 1],
 }
 
 impl Node {
@@ -71,7 +75,8 @@ impl Node {
             colour: 0,
             depth: 0,
             flags: AtomicU8::new(FREE),
-            _pad: [0; 2],
+            idle: 0,
+            _pad: [0; 1],
         }
     }
 
