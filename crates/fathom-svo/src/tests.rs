@@ -179,6 +179,45 @@ fn links_stay_valid_through_subdivision_recombination_and_unification() {
 }
 
 #[test]
+fn unvisited_bricks_are_kept_for_the_idle_limit_then_unloaded() {
+    let mut ex = Explorer::new(&scenes::menger(8), cfg(64, 48)).unwrap();
+    let cam = corner_camera();
+    ex.settle(&cam, 60);
+    let away = Camera {
+        eye: DVec3::new(-1.9, -1.7, -1.5),
+        target: DVec3::new(-0.6, -0.5, -0.4),
+        up: DVec3::Y,
+        fov: 20.0,
+    };
+    let look = |ex: &mut Explorer, c: &Camera| {
+        let (_, reqs, _) = ex.render(c);
+        ex.release_requests(&reqs);
+    };
+    let keep = ex.cfg.keep_levels;
+    // Everything left after this was seen from the corner just now: every counter is 0.
+    look(&mut ex, &cam);
+    crate::evict::unify(&mut ex.tree, keep, 1);
+    let kept = ex.tree.counts().nodes;
+    // From here only the view away is visited: the corner's bricks go idle, and with a limit
+    // of 3 they survive two unifications and go at the third.
+    for round in 1..=2 {
+        look(&mut ex, &away);
+        let n = crate::evict::unify(&mut ex.tree, keep, 3);
+        assert_eq!(
+            n, 0,
+            "round {round}: {n} bricks unloaded before the idle limit"
+        );
+        assert_eq!(ex.tree.counts().nodes, kept);
+        check(&ex.tree).unwrap();
+    }
+    look(&mut ex, &away);
+    let n = crate::evict::unify(&mut ex.tree, keep, 3);
+    check(&ex.tree).unwrap();
+    assert!(n > 0, "nothing unloaded at the idle limit");
+    assert!(ex.tree.counts().nodes < kept);
+}
+
+#[test]
 fn stress_camera_moves_subdivision_and_eviction_without_dangling_links_or_tears() {
     let mut c = cfg(32, 24);
     c.unify_every = 3;
