@@ -4,8 +4,9 @@
 //! bricks keep being created as the zoom deepens and the smallest ones never hold more than
 //! `8^k` nodes. Every node names its brick representative; a ray marks the bricks of the
 //! leaves it passes through (walking up the chain of enclosing bricks until one is already
-//! marked). Every few frames, [`unify`] turns each unvisited brick into a single full leaf
-//! holding its average colour, frees its nodes, and repairs the neighbour links that pointed
+//! marked). Every few frames, [`unify`] turns each brick that has gone unvisited long enough
+//! (a few unifications in a row; one under memory pressure) into a single full leaf holding its
+//! average colour, frees its nodes, and repairs the neighbour links that pointed
 //! into them: those can only come from smaller nodes touching the brick's faces, so a walk
 //! over the six face-adjacent regions finds them all. Freed child blocks go to the arena's
 //! free list.

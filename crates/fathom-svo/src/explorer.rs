@@ -87,9 +87,10 @@ impl Default for ExplorerConfig {
             threads: 2,
             brick_period: 3,
             keep_levels: 3,
-            // Every 4 frames: often enough that the bricks the zoom has left behind are
-            // unloaded before the next levels fill in (the node count plateaus), rarely
-            // enough that the unification walk stays a small share of the frame.
+            // Every 4 frames: each walk stays a small share of the frame, and a brick goes
+            // after IDLE_UNIFICATIONS of them unvisited (~16 frames), soon enough that the
+            // node count plateaus over a zoom and late enough that background the zoom
+            // uncovers again is still there.
             unify_every: 4,
             max_memory: 1 << 30,
             margin: crate::generate::DEFAULT_MARGIN,
@@ -626,7 +627,7 @@ impl Explorer {
                 break;
             }
             // Below the floor, no more than it still needs: a whole batch of double-double
-            // subdivisions past it (72 where 52 reach it) took deep frames to 17-19 ms.
+            // subdivisions past it (72 where 52 reach it) took deep frames to 15-19 ms.
             let size = if done_min < self.cfg.min_subdivisions {
                 batch.min((self.cfg.min_subdivisions - done_min).div_ceil(weight))
             } else {
