@@ -15,7 +15,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
 
-cargo build -q -p fathom
+# The binary of the workspace's test build (`cargo test --workspace` builds it for the
+# integration tests; after scripts/test.sh this is instant). `cargo build -p fathom` resolves
+# features for that one package, not for the workspace, and compiled naga, fathom-svo,
+# fathom-trace and more a second time: about 7 minutes of a test run.
+cargo test -q --workspace --no-run
 fathom="${CARGO_TARGET_DIR:-$root/target}/debug/fathom"
 fathom=$(cd "$(dirname "$fathom")" && pwd)/fathom
 work=$(mktemp -d /tmp/fathom-farm-test.XXXXXX)
