@@ -71,6 +71,11 @@ pub struct OctreeSettings {
     pub subdivide_ms: f64,
     /// Unify (unload bricks no ray visited) every this many stepped frames.
     pub unify_every: u32,
+    /// Side in pixels of the tiles whose corner rays find where all the tile's rays start
+    /// (0: every ray from the eye's leaf; the images are the same), [0, 256].
+    pub beam: u32,
+    /// Finest side the beam tiles are refined to (quadrants), [1, 256].
+    pub beam_min: u32,
 }
 
 impl Default for OctreeSettings {
@@ -84,6 +89,8 @@ impl Default for OctreeSettings {
             settle_frames: 400,
             subdivide_ms: 12.0,
             unify_every: 4,
+            beam: fathom_svo::explorer::DEFAULT_BEAM,
+            beam_min: fathom_svo::explorer::DEFAULT_BEAM_MIN,
         }
     }
 }
@@ -314,6 +321,8 @@ impl RenderRequest {
             traversal: o.traversal,
             subdivide_ms: o.subdivide_ms,
             unify_every: o.unify_every,
+            beam: o.beam,
+            beam_min: o.beam_min,
             root: match o.root {
                 Some(c) => RootSpec::from_cube(Some(c)),
                 None => RootSpec::Fit { half: o.fit_half },

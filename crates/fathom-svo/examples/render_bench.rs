@@ -3,7 +3,7 @@
 //! (min and median of repeated renders of the same frozen tree) and prints an image checksum.
 //!
 //! `cargo run --release -p fathom-svo --example render_bench -- mandelbulb 300 1e11 [threads]
-//! [neighbour|kdrestart] [beam tile side, 0 for none]`
+//! [neighbour|kdrestart] [beam tile side, 0 for none] [finest beam tile side]`
 
 use fathom_core::camera_path::path_preset;
 use fathom_svo::RootSpec;
@@ -35,6 +35,10 @@ fn main() {
             .get(6)
             .and_then(|s| s.parse().ok())
             .unwrap_or(fathom_svo::explorer::DEFAULT_BEAM),
+        beam_min: args
+            .get(7)
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(fathom_svo::explorer::DEFAULT_BEAM_MIN),
         ..ExplorerConfig::default()
     };
     let mut ex = Explorer::new(&p.scene, cfg).unwrap();

@@ -23,8 +23,10 @@ pub enum OctreeError {
     SubdivideMs(f64),
     #[error("the root cube must be finite with a positive side")]
     Root,
-    #[error("beam tile side {0} is out of range 0..=256 pixels (0: no beams)")]
+    #[error("beam (tile side) {0} is out of range 0..=256 pixels (0: no beams)")]
     Beam(u32),
+    #[error("beam-min (finest beam tile side) {0} is out of range 1..=256 pixels")]
+    BeamMin(u32),
     #[error(transparent)]
     Compile(#[from] CompileError),
     #[error("cannot start {threads} threads: {message}")]

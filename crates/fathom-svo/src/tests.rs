@@ -367,11 +367,13 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
     }
 }
 
-/// Renders with beam tiles of side `beam` (0: every ray from the skip node) without changing
-/// the tree; returns the image and the node steps (beams' included).
-fn render_beam(ex: &mut Explorer, cam: &Camera, beam: u32) -> (SvoImage, u64) {
+/// Renders with beam tiles of side `beam` (0: every ray from the skip node) refined down to
+/// `beam_min` without changing the tree; returns the image and the node steps (beams'
+/// included).
+fn render_beam(ex: &mut Explorer, cam: &Camera, (beam, beam_min): (u32, u32)) -> (SvoImage, u64) {
     ex.cfg.traversal = Traversal::Neighbour;
     ex.cfg.beam = beam;
+    ex.cfg.beam_min = beam_min;
     let (img, reqs, c) = ex.render(cam);
     ex.release_requests(&reqs);
     (img, c[2])
@@ -385,6 +387,8 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
     // sponge's central tunnel. Tiles of 8 (the default) and of 3 (partial tiles at the
     // image's right and bottom edges). Each must give exactly the image of rays started at
     // the skip node, and the beams must save steps (else the test would prove nothing).
+    // Refined tiles too: 8 down to 4 (the default) and to 2, 16 to 4, and 12 to 3 (quadrants
+    // cut at odd sides and at the image's edges), each level saving steps over the one above.
     let p = path_preset("mandelbulb").unwrap();
     let mut views = Vec::new();
     for (frame, fidelity) in [(150, 1.0), (299, 1.0), (299, 4.0)] {
@@ -414,18 +418,29 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
             ex.skip().is_some(),
             "{name}: the eye must be inside the root"
         );
-        let (plain, plain_steps) = render_beam(&mut ex, &cam, 0);
+        let (plain, plain_steps) = render_beam(&mut ex, &cam, (0, 1));
         let hits = plain.mask().iter().filter(|&&m| m).count();
         assert!(hits > 1000, "{name}: too few hits to compare: {hits}");
-        for beam in [8, 3] {
+        for beam in [(8, 8), (3, 3), (8, 4), (8, 2), (16, 4), (12, 3)] {
             let (img, steps) = render_beam(&mut ex, &cam, beam);
             let beam_steps = ex.beam_steps();
-            assert_eq!(img, plain, "{name}: beam {beam} changed the image");
+            assert_eq!(img, plain, "{name}: beam {beam:?} changed the image");
             assert!(
                 beam_steps > 0 && steps < plain_steps,
-                "{name}: beam {beam} saved no steps ({steps} vs {plain_steps})"
+                "{name}: beam {beam:?} saved no steps ({steps} vs {plain_steps})"
             );
         }
+        // Refining 8-pixel tiles to 4 must start the pixel rays deeper (fewer steps after the
+        // start: the beams' own steps aside).
+        let after_start = |ex: &mut Explorer, beam| {
+            let (_, steps) = render_beam(ex, &cam, beam);
+            steps - ex.beam_steps()
+        };
+        let (coarse, fine) = (after_start(&mut ex, (8, 8)), after_start(&mut ex, (8, 4)));
+        assert!(
+            fine < coarse,
+            "{name}: 4-pixel quadrants started no ray deeper ({fine} vs {coarse} steps)"
+        );
         let kd = render_with(&mut ex, &cam, Traversal::KdRestart);
         assert_eq!(kd, plain, "{name}: kd-restart differs");
         check(&ex.tree).unwrap();

@@ -478,7 +478,11 @@ const BEAM_MARGIN: f64 = 1.0 / (1u64 << 46) as f64;
 const BEAM_MAX_LEAVES: u32 = 4096;
 
 /// The conservative beam start of a tile of pixels whose corner pixels cast the rays `c` (all
-/// from the eye, inside the root; `skip` is the eye's leaf), and the node steps the beam took.
+/// from the eye, inside the root), walking from `from`, and the node steps the beam took.
+/// `from` is the skip node (the eye's leaf at distance 0) or the start of a tile containing
+/// this one (a quadrant refined from its parent tile's start: the quadrant's rays are some of
+/// the parent's, so from the parent's start they walk the leaves they walk from the skip node,
+/// and everything below holds from there).
 ///
 /// The corner rays walk in lockstep from the skip node: from a leaf `K` all four must leave
 /// through the same face `f`, into the same leaf `K'`, each exit point at least a margin
@@ -514,12 +518,12 @@ const BEAM_MAX_LEAVES: u32 = 4096;
 /// `K`: it cannot change which LOD node a ray stops at). Only steps and the link
 /// improvements on the skipped leaves differ (any valid link gives the same image). The leaves
 /// the rays would have marked visited before `K` are the beam's: it marks each leaf it leaves.
-pub fn beam_start(tree: &Octree, c: &[Ray; 4], skip: (u32, BoxU)) -> (BeamStart, u32) {
+pub fn beam_start(tree: &Octree, c: &[Ray; 4], from: BeamStart) -> (BeamStart, u32) {
     let nodes = &tree.nodes;
     let anchor = &tree.anchor;
     let lod = c[0].lod;
-    let (mut id, mut b) = skip;
-    let mut best = BeamStart { id, b, t: 0.0 };
+    let (mut id, mut b) = (from.id, from.b);
+    let mut best = from;
     // A lower bound of |v| for v in the convex hull of the corner directions: v . u >= min_i
     // d_i . u for the unit vector u along their sum.
     let sum: [f64; 3] = std::array::from_fn(|a| c.iter().map(|r| r.d[a]).sum());
@@ -532,7 +536,8 @@ pub fn beam_start(tree: &Octree, c: &[Ray; 4], skip: (u32, BoxU)) -> (BeamStart,
     if cmin.is_nan() || cmin <= 0.0 {
         return (best, 0);
     }
-    let mut t = [0.0f64; 4];
+    // Every corner is inside `from`'s leaf at its distance (it is a valid start for them all).
+    let mut t = [from.t; 4];
     let mut steps = 0u32;
     for _ in 0..BEAM_MAX_LEAVES {
         let n = &nodes[id as usize];

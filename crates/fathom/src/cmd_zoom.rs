@@ -105,6 +105,15 @@ pub struct ZoomArgs {
     /// Unify (unload bricks no ray visited) every this many frames, >= 1.
     #[arg(long, default_value_t = 4)]
     pub unify_every: u32,
+    /// Beam tiles: each tile of this many pixels square walks its corner rays through the
+    /// empty space in front of the eye once, and all its rays start where they all still
+    /// are (0: every ray from the eye's leaf). The same images, fewer steps per ray.
+    #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_BEAM)]
+    pub beam: u32,
+    /// Finest beam tile: tiles are cut into quadrants, each refining its parent's start,
+    /// down to this side in pixels (the --beam value: one level).
+    #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_BEAM_MIN)]
+    pub beam_min: u32,
     /// Screen-space ambient occlusion strength applied to written frames (the sphere
     /// tracer's post effect), [0, 4].
     #[arg(long, default_value_t = 1.0)]
@@ -197,6 +206,8 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
                 traversal: a.traversal.into(),
                 subdivide_ms: a.subdivide_ms,
                 unify_every: a.unify_every,
+                beam: a.beam,
+                beam_min: a.beam_min,
                 ..OctreeSettings::default()
             },
             ..RenderRequest::default()
@@ -315,6 +326,12 @@ mod tests {
         a.unify_every = 0;
         assert!(zoom(&a).err().unwrap().contains("unify-every"));
         a.unify_every = 4;
+        a.beam = 300;
+        assert!(zoom(&a).err().unwrap().contains("beam (tile side) 300"));
+        a.beam = 8;
+        a.beam_min = 0;
+        assert!(zoom(&a).err().unwrap().contains("beam-min"));
+        a.beam_min = 4;
         a.max_memory = "1K".into();
         assert!(zoom(&a).err().unwrap().contains("max memory"));
     }
