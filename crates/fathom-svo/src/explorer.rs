@@ -560,15 +560,7 @@ impl Explorer {
                         let mut largest = 0f64;
                         let y0 = k * beam;
                         let y1 = y0 + cband.len() / w as usize - 1;
-                        // The finest tiles' starts, row-major over the band.
-                        let cols = (w as usize).div_ceil(fine);
-                        let mut starts = vec![skip0; cols * (y1 + 1 - y0).div_ceil(fine)];
-                        let mut fill = FineStarts {
-                            y0,
-                            cols,
-                            side: fine,
-                            starts: &mut starts,
-                        };
+                        let mut starts = FineStarts::new(w as usize, y0, y1, fine, skip0);
                         let last = (w as usize - 1, y1);
                         for x0 in (0..w as usize).step_by(beam) {
                             let tile = (x0, y0, beam);
@@ -578,7 +570,7 @@ impl Explorer {
                                 tile,
                                 last,
                                 skip0,
-                                &mut fill,
+                                &mut starts,
                             );
                             c[2] += n;
                             c[3] += n;
@@ -590,8 +582,7 @@ impl Explorer {
                             let y = y0 + j;
                             for x in 0..w as usize {
                                 let (d, r) = ray(x, y);
-                                let s = &starts[(j / fine) * cols + x / fine];
-                                let hit = cast_from(tree, &r, s, &mut reqs);
+                                let hit = cast_from(tree, &r, starts.at(x, y), &mut reqs);
                                 put(x, d, hit, crow, drow, &mut c, &mut largest);
                             }
                         }
@@ -821,11 +812,29 @@ pub const ANCHOR_LEVELS_ABOVE: u8 = 36;
 
 /// The starts of one band's finest beam tiles (side `side` pixels, row-major, `cols` a row; the
 /// band's first pixel row is `y0`).
-struct FineStarts<'a> {
+struct FineStarts {
     y0: usize,
     cols: usize,
     side: usize,
-    starts: &'a mut [BeamStart],
+    starts: Vec<BeamStart>,
+}
+
+impl FineStarts {
+    /// Tiles of side `side` over a band `width` pixels wide, rows `y0..=y1`, all at `start`.
+    fn new(width: usize, y0: usize, y1: usize, side: usize, start: BeamStart) -> FineStarts {
+        let cols = width.div_ceil(side);
+        FineStarts {
+            y0,
+            cols,
+            side,
+            starts: vec![start; cols * (y1 + 1 - y0).div_ceil(side)],
+        }
+    }
+
+    /// The start of the finest tile holding pixel `(x, y)`.
+    fn at(&mut self, x: usize, y: usize) -> &mut BeamStart {
+        &mut self.starts[(y - self.y0) / self.side * self.cols + x / self.side]
+    }
 }
 
 /// Finds the beam start of the tile `(x0, y0, side)` (clipped to the last pixel `last`) from
@@ -844,7 +853,7 @@ fn refine_tile(
     let (s, n) = beam_start(tree, &corners, from);
     let mut n = n as u64;
     if side <= out.side {
-        out.starts[(y0 - out.y0) / out.side * out.cols + x0 / out.side] = s;
+        *out.at(x0, y0) = s;
         return n;
     }
     let half = side / 2;

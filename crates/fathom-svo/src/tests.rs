@@ -384,11 +384,11 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
     // Settled views with the eye inside the root (the beams' case): the Mandelbulb zoom at two
     // depths, at the default LOD and at a coarse one (fidelity 4: implicit LOD stops rays on
     // inner nodes four pixels wide, so the beams' LOD test is what stops them), and the Menger
-    // sponge's central tunnel. Tiles of 8 (the default) and of 3 (partial tiles at the
-    // image's right and bottom edges). Each must give exactly the image of rays started at
-    // the skip node, and the beams must save steps (else the test would prove nothing).
-    // Refined tiles too: 8 down to 4 (the default) and to 2, 16 to 4, and 12 to 3 (quadrants
-    // cut at odd sides and at the image's edges), each level saving steps over the one above.
+    // sponge's central tunnel. Single-level tiles of 8 and of 3 (partial tiles at the image's
+    // right and bottom edges), and refined tiles: 8 down to 4 and to 2, 16 to 4 (the
+    // default), and 12 to 3 (quadrants cut at odd sides and at the image's edges). Each must
+    // give exactly the image of rays started at the skip node, and the beams must save steps
+    // (else the test would prove nothing); refining 8 to 4 must start the rays deeper.
     let p = path_preset("mandelbulb").unwrap();
     let mut views = Vec::new();
     for (frame, fidelity) in [(150, 1.0), (299, 1.0), (299, 4.0)] {
