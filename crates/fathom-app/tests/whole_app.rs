@@ -418,7 +418,11 @@ fn an_lfo_binding_animates_the_viewport_with_no_recompiles() {
     h.key_press(egui::Key::F2);
     h.key_press(egui::Key::F3);
     h.key_press(egui::Key::F4);
-    step_until(&mut h, "a first frame", |a| a.shown_values().is_some());
+    // The keys take effect in the next frame; a first frame can already be on screen before
+    // it (slower builds deliver one within the first steps), laid out beside the panels.
+    step_until(&mut h, "the panels hidden and a first frame", |a| {
+        !a.show_panels && !a.show_overlay && !a.show_live && a.shown_values().is_some()
+    });
     let compiles = h.state().compiles;
     let (v0, m0, px0) = shown_value_and_mean(&mut h);
     // Frames keep coming with new values and no input at all.
@@ -428,6 +432,7 @@ fn an_lfo_binding_animates_the_viewport_with_no_recompiles() {
             .is_some_and(|v| (v - v0).abs() > 0.6)
     });
     let (v1, m1, px1) = shown_value_and_mean(&mut h);
+    assert_eq!(px0.len(), px1.len(), "both frames fill the same viewport");
     let changed = px0
         .iter()
         .zip(&px1)
