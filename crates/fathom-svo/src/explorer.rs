@@ -20,6 +20,7 @@ use crate::generate::{
 };
 use crate::node::{NONE, REQUESTED, pack_rgb};
 use crate::octree::{Anchor, BoxU, Octree, dim_at};
+use crate::ray_grid::{RayGrid, RaySpan, SPAN};
 use crate::root::RootSpec;
 use crate::traverse::{
     BeamStart, Hit, Ray, Request, beam_start, cast_from, cast_kdrestart, cast_neighbour,
@@ -578,12 +579,18 @@ impl Explorer {
                         let rows = cband
                             .chunks_mut(w as usize)
                             .zip(dband.chunks_mut(w as usize));
+                        let mut span = RaySpan::default();
                         for (j, (crow, drow)) in rows.enumerate() {
                             let y = y0 + j;
-                            for x in 0..w as usize {
-                                let (d, r) = ray(x, y);
-                                let hit = cast_from(tree, &r, starts.at(x, y), &mut reqs);
-                                put(x, d, hit, crow, drow, &mut c, &mut largest);
+                            for x0 in (0..w as usize).step_by(SPAN) {
+                                let n = SPAN.min(w as usize - x0);
+                                grid.span(y, x0, n, &mut span);
+                                for i in 0..n {
+                                    let x = x0 + i;
+                                    let r = span.ray(i, o, lod);
+                                    let hit = cast_from(tree, &r, starts.at(x, y), &mut reqs);
+                                    put(x, span.dir(i), hit, crow, drow, &mut c, &mut largest);
+                                }
                             }
                         }
                         (reqs, c, largest)
@@ -600,11 +607,15 @@ impl Explorer {
                         let mut largest = 0f64;
                         // Where the previous ray of this row entered the root (eye outside).
                         let mut entry = None;
-                        for x in 0..w as usize {
-                            let d = grid.dir(x, y);
-                            let ray = Ray::new(o, [d.x, d.y, d.z], lod);
-                            let hit = cast(tree, &ray, skip, &mut entry, trav, &mut reqs);
-                            put(x, d, hit, crow, drow, &mut c, &mut largest);
+                        let mut span = RaySpan::default();
+                        for x0 in (0..w as usize).step_by(SPAN) {
+                            let n = SPAN.min(w as usize - x0);
+                            grid.span(y, x0, n, &mut span);
+                            for i in 0..n {
+                                let ray = span.ray(i, o, lod);
+                                let hit = cast(tree, &ray, skip, &mut entry, trav, &mut reqs);
+                                put(x0 + i, span.dir(i), hit, crow, drow, &mut c, &mut largest);
+                            }
                         }
                         (reqs, c, largest)
                     })
@@ -879,39 +890,6 @@ pub const DEFAULT_BEAM_MIN: u32 = 4;
 /// voxel, `t` = 0) count as this many pixels: keeps the figure finite for JSON.
 pub const MAX_VOXEL_PX: f64 = 1e6;
 
-/// The pixel rays' directions of one frame, [`CameraFrame::ray_dir`] bit for bit with its
-/// divisions and per-row and per-column products done once: `forward + right sx` per column
-/// and `up sy` per row, added in the order `ray_dir` adds them, then normalised.
-struct RayGrid {
-    cols: Vec<DVec3>,
-    rows: Vec<DVec3>,
-}
-
-impl RayGrid {
-    fn new(frame: &CameraFrame, w: u32, h: u32) -> RayGrid {
-        let hf = h as f64;
-        let cols = (0..w)
-            .map(|x| {
-                let sx = (2.0 * (x as f64 + 0.5) - w as f64) / hf * frame.tan_half_fov;
-                frame.forward + frame.right * sx
-            })
-            .collect();
-        let rows = (0..h)
-            .map(|y| {
-                let sy = (hf - 2.0 * (y as f64 + 0.5)) / hf * frame.tan_half_fov;
-                frame.up * sy
-            })
-            .collect();
-        RayGrid { cols, rows }
-    }
-
-    /// Unit direction through the centre of pixel (`x`, `y`).
-    #[inline(always)]
-    fn dir(&self, x: usize, y: usize) -> DVec3 {
-        (self.cols[x] + self.rows[y]).normalize()
-    }
-}
-
 fn cast(
     tree: &Octree,
     ray: &Ray,
@@ -939,25 +917,6 @@ fn sky_colour(frame: &CameraFrame, d: DVec3, sky: ([f64; 3], [f64; 3])) -> u32 {
 #[cfg(test)]
 mod order_tests {
     use super::*;
-
-    #[test]
-    fn the_ray_grid_gives_the_cameras_directions_bit_for_bit() {
-        let cam = Camera {
-            eye: DVec3::new(0.3, -1.7, 2.9),
-            target: DVec3::new(-0.2, 0.1, 0.05),
-            ..Camera::default()
-        };
-        let frame = cam.frame();
-        for (w, h) in [(640, 480), (33, 17), (1, 1)] {
-            let grid = RayGrid::new(&frame, w, h);
-            for y in 0..h as usize {
-                for x in 0..w as usize {
-                    let d = frame.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
-                    assert_eq!(grid.dir(x, y).to_array(), d.to_array(), "pixel {x},{y}");
-                }
-            }
-        }
-    }
 
     #[test]
     fn requests_are_served_largest_on_screen_first() {

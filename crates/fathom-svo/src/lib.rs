@@ -13,6 +13,7 @@
 //! - [`evict`]: bricks, visited flags, NRU unification with link repair;
 //! - [`check`]: the link-integrity checker;
 //! - [`outline`]: silhouette agreement with a sphere tracer, image similarity;
+//! - [`ray_grid`]: the pixel rays of a frame, set up a run of pixels at a time;
 //! - [`explorer`]: one frame = render (read-only) -> subdivide -> unify; stats;
 //! - [`precision`]: the guard that stops a zoom where the octree's arithmetic runs out
 //!   (depth 98, zoom ~1e28 at 640x480);
@@ -30,6 +31,7 @@ pub mod node;
 pub mod octree;
 pub mod outline;
 pub mod precision;
+pub mod ray_grid;
 pub mod root;
 pub mod stats;
 pub mod traverse;
