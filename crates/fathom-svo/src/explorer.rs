@@ -652,6 +652,8 @@ impl Explorer {
         // Batches of 64 f64 subdivisions' worth per thread, so the time check comes as often.
         let batch = (64 / weight).max(1) * self.cfg.threads.max(1);
         let mut done_min = 0;
+        // Wall time one subdivision took in the batches so far (all threads, linking included).
+        let mut per_sub_ms: Option<f64> = None;
         while next < reqs.len() {
             let elapsed = t0.elapsed().as_secs_f64() * 1e3;
             if done_min >= self.cfg.min_subdivisions && elapsed >= budget_ms {
@@ -662,11 +664,20 @@ impl Explorer {
             }
             // Below the floor, no more than it still needs: a whole batch of double-double
             // subdivisions past it (72 where 52 reach it) took deep frames to 15-19 ms.
+            // Past it, no more than the time left is expected to hold (at least one per
+            // thread): whole batches ran a Menger zoom's 12 ms budget to 14 ms a frame.
             let size = if done_min < self.cfg.min_subdivisions {
                 batch.min((self.cfg.min_subdivisions - done_min).div_ceil(weight))
+            } else if let Some(c) = per_sub_ms {
+                let fit = ((budget_ms - elapsed) / c).floor();
+                if fit < 1.0 {
+                    break;
+                }
+                batch.min((fit as usize).max(self.cfg.threads.max(1)))
             } else {
                 batch
             };
+            let tb = Instant::now();
             let end = (next + size).min(reqs.len());
             let chunk = &reqs[next..end];
             let tree = &self.tree;
@@ -686,6 +697,7 @@ impl Explorer {
                 }
             }
             done_min += chunk.len() * weight;
+            per_sub_ms = Some(tb.elapsed().as_secs_f64() * 1e3 / chunk.len() as f64);
             next = end;
         }
         for r in &reqs[next..] {
