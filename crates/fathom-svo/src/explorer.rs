@@ -638,7 +638,7 @@ impl Explorer {
     /// (split, emptied, no-memory).
     pub fn subdivide(&mut self, mut reqs: Vec<Request>, budget_ms: f64) -> [u64; 3] {
         let t0 = Instant::now();
-        order_requests(&mut reqs);
+        self.pool.install(|| order_requests(&mut reqs));
         let mut out = [0u64; 3];
         let mut next = 0;
 
@@ -809,12 +809,21 @@ impl Explorer {
 /// beyond its distance). A zoom's frames then lose their biggest blocks first: the time budget
 /// goes to the voxels that spoil the picture most, not to the shallowest ones (a shallow voxel
 /// far away can be smaller on screen than a deep one in front of the eye).
+///
+/// Each footprint (a division) is computed once, not twice per comparison, and the sort runs
+/// on the caller's rayon pool: sorting 15-20 thousand requests a frame on one thread, with
+/// the other idle, was about 1 ms of a Menger zoom's frame. The order is the one
+/// `f64::total_cmp` gives (descending), then ids: keys are unique, so it does not depend on
+/// the sort.
 pub fn order_requests(reqs: &mut [Request]) {
-    reqs.sort_unstable_by(|a, b| {
-        b.footprint()
-            .total_cmp(&a.footprint())
-            .then(a.id.cmp(&b.id))
-    });
+    reqs.par_sort_by_cached_key(|r| (std::cmp::Reverse(total_order(r.footprint())), r.id));
+}
+
+/// `f64::total_cmp` as a key: the bits with the sign's meaning folded in, as that function
+/// compares them.
+fn total_order(x: f64) -> i64 {
+    let bits = x.to_bits() as i64;
+    bits ^ ((((bits >> 63) as u64) >> 1) as i64)
 }
 
 /// A frame's unification unloads a brick once this many unifications in a row found it
@@ -929,6 +938,32 @@ fn sky_colour(frame: &CameraFrame, d: DVec3, sky: ([f64; 3], [f64; 3])) -> u32 {
 #[cfg(test)]
 mod order_tests {
     use super::*;
+
+    #[test]
+    fn the_request_order_is_total_cmp_then_id() {
+        // Footprints with ties, zeros of both signs, infinities (t = 0) and a NaN.
+        let b = |d: u8| (0..d).fold(BoxU::ROOT, |b, _| b.child(0));
+        let ts = [0.5, 0.0, -0.0, 1e-300, 2.0, 0.5, f64::NAN, 3.0, 1e300, 0.25];
+        let mut r: Vec<Request> = (0..200u32)
+            .map(|i| Request {
+                id: (i * 7919) % 1000,
+                b: b((i % 5) as u8),
+                t: ts[(i as usize * 31) % ts.len()],
+            })
+            .collect();
+        let mut want = r.clone();
+        want.sort_by(|a, b| {
+            b.footprint()
+                .total_cmp(&a.footprint())
+                .then(a.id.cmp(&b.id))
+        });
+        order_requests(&mut r);
+        let key = |q: &Request| (q.footprint().to_bits(), q.id);
+        assert_eq!(
+            r.iter().map(key).collect::<Vec<_>>(),
+            want.iter().map(key).collect::<Vec<_>>()
+        );
+    }
 
     #[test]
     fn requests_are_served_largest_on_screen_first() {
