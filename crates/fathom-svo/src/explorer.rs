@@ -20,7 +20,7 @@ use crate::generate::{
 };
 use crate::node::{NONE, REQUESTED, pack_rgb};
 use crate::octree::{Anchor, BoxU, Octree, dim_at};
-use crate::ray_grid::{RayGrid, RaySpan, SPAN};
+use crate::ray_grid::{RayGrid, RaySpan};
 use crate::root::RootSpec;
 use crate::traverse::{
     BeamStart, Hit, Ray, Request, beam_start, cast_from, cast_kdrestart, cast_neighbour,
@@ -535,9 +535,10 @@ impl Explorer {
                 // pixels' rays find where all its rays can start (`beam_start`), its quadrants
                 // refine that start down to the finest tiles, then the rows are cast as
                 // before, each ray from its finest tile's start.
+                // The tiles' corner rays, one at a time.
                 let ray = |x: usize, y: usize| {
                     let d = grid.dir(x, y);
-                    (d, Ray::new(o, [d.x, d.y, d.z], lod))
+                    Ray::new(o, [d.x, d.y, d.z], lod)
                 };
                 let skip0 = BeamStart {
                     id: skip.0,
@@ -567,7 +568,7 @@ impl Explorer {
                             let tile = (x0, y0, beam);
                             let n = refine_tile(
                                 tree,
-                                &|x, y| ray(x, y).1,
+                                &ray,
                                 tile,
                                 last,
                                 skip0,
@@ -582,16 +583,10 @@ impl Explorer {
                         let mut span = RaySpan::default();
                         for (j, (crow, drow)) in rows.enumerate() {
                             let y = y0 + j;
-                            for x0 in (0..w as usize).step_by(SPAN) {
-                                let n = SPAN.min(w as usize - x0);
-                                grid.span(y, x0, n, &mut span);
-                                for i in 0..n {
-                                    let x = x0 + i;
-                                    let r = span.ray(i, o, lod);
-                                    let hit = cast_from(tree, &r, starts.at(x, y), &mut reqs);
-                                    put(x, span.dir(i), hit, crow, drow, &mut c, &mut largest);
-                                }
-                            }
+                            grid.row(y, o, lod, &mut span, |x, d, r| {
+                                let hit = cast_from(tree, r, starts.at(x, y), &mut reqs);
+                                put(x, d, hit, crow, drow, &mut c, &mut largest);
+                            });
                         }
                         (reqs, c, largest)
                     })
@@ -608,15 +603,10 @@ impl Explorer {
                         // Where the previous ray of this row entered the root (eye outside).
                         let mut entry = None;
                         let mut span = RaySpan::default();
-                        for x0 in (0..w as usize).step_by(SPAN) {
-                            let n = SPAN.min(w as usize - x0);
-                            grid.span(y, x0, n, &mut span);
-                            for i in 0..n {
-                                let ray = span.ray(i, o, lod);
-                                let hit = cast(tree, &ray, skip, &mut entry, trav, &mut reqs);
-                                put(x0 + i, span.dir(i), hit, crow, drow, &mut c, &mut largest);
-                            }
-                        }
+                        grid.row(y, o, lod, &mut span, |x, d, r| {
+                            let hit = cast(tree, r, skip, &mut entry, trav, &mut reqs);
+                            put(x, d, hit, crow, drow, &mut c, &mut largest);
+                        });
                         (reqs, c, largest)
                     })
                     .reduce(|| (Vec::new(), [0u64; 4], 0f64), reduce)

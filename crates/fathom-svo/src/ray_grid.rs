@@ -48,6 +48,28 @@ impl RayGrid {
         (self.cols[x] + self.rows[y]).normalize()
     }
 
+    /// Calls `f(x, d, ray)` for every pixel of row `y`, left to right: `d` its unit direction
+    /// and `ray` from `o` with LOD factor `lod`, set up [`SPAN`] pixels at a time in `span`
+    /// (scratch the caller keeps across rows).
+    #[inline(always)]
+    pub fn row(
+        &self,
+        y: usize,
+        o: [f64; 3],
+        lod: f64,
+        span: &mut RaySpan,
+        mut f: impl FnMut(usize, DVec3, &Ray),
+    ) {
+        let w = self.cols.len();
+        for x0 in (0..w).step_by(SPAN) {
+            let n = SPAN.min(w - x0);
+            self.span(y, x0, n, span);
+            for i in 0..n {
+                f(x0 + i, span.dir(i), &span.ray(i, o, lod));
+            }
+        }
+    }
+
     /// Sets `span` up for the pixels `x0..x0 + n` of row `y` (`n` at most [`SPAN`]), each
     /// direction and reciprocal bit for bit what [`RayGrid::dir`] and [`Ray::new`] give.
     pub fn span(&self, y: usize, x0: usize, n: usize, span: &mut RaySpan) {
