@@ -566,14 +566,7 @@ impl Explorer {
                         let last = (w as usize - 1, y1);
                         for x0 in (0..w as usize).step_by(beam) {
                             let tile = (x0, y0, beam);
-                            let n = refine_tile(
-                                tree,
-                                &ray,
-                                tile,
-                                last,
-                                skip0,
-                                &mut starts,
-                            );
+                            let n = refine_tile(tree, &ray, tile, last, skip0, &mut starts);
                             c[2] += n;
                             c[3] += n;
                         }
