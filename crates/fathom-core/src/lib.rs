@@ -47,7 +47,7 @@ pub mod vec3;
 pub use camera::{Camera, CameraFrame, Projection};
 pub use dd::Dd;
 pub use eval::Evaluator;
-pub use real::{F32x8, Real};
+pub use real::{F32x8, F64x4, Real};
 pub use scene::{Call, Material, Node, Scene};
 pub use tape::Tape;
 pub use value::Value;

@@ -1,8 +1,9 @@
 //! The scalar abstraction every distance function is written against.
 //!
-//! Each primitive, operator and fractal is written once, generic over [`Real`]. Three types
+//! Each primitive, operator and fractal is written once, generic over [`Real`]. Four types
 //! implement it: `f64` (the exact scalar path used as the reference), [`F32x8`] (eight `f32`
-//! lanes evaluated together by AVX2, the throughput path) and [`crate::dd::Dd`] (double-double,
+//! lanes evaluated together by AVX2, the throughput path), [`F64x4`] (four `f64` lanes, within
+//! a few ulps of `f64`: the octree's voxel colouring) and [`crate::dd::Dd`] (double-double,
 //! one lane, for zooms past f64 precision). Control flow
 //! that depends on a value (a fold, a bailout) is written with masks and [`Real::select`], so the
 //! same source is branch-free on the packet path and an ordinary `if` on the scalar path.
@@ -219,159 +220,177 @@ impl Real for f64 {
     }
 }
 
+/// The mask type and the [`Real`] implementation of a `wide` packet type `$w` of `$n` lanes
+/// (`$narrow` converts an `f64` to a lane), declared once for every packet width.
+macro_rules! packet_real {
+    ($name:ident, $w:ty, $mask:ident, $n:literal, $narrow:path) => {
+        #[doc = concat!("Lane mask of [`", stringify!($name), "`]: all-ones bits in set lanes.")]
+        #[derive(Clone, Copy, Debug)]
+        pub struct $mask(pub $w);
+
+        impl BitAnd for $mask {
+            type Output = Self;
+            #[inline(always)]
+            fn bitand(self, o: Self) -> Self {
+                $mask(self.0 & o.0)
+            }
+        }
+        impl BitOr for $mask {
+            type Output = Self;
+            #[inline(always)]
+            fn bitor(self, o: Self) -> Self {
+                $mask(self.0 | o.0)
+            }
+        }
+        impl Not for $mask {
+            type Output = Self;
+            #[inline(always)]
+            fn not(self) -> Self {
+                $mask(!self.0)
+            }
+        }
+        impl Mask for $mask {
+            #[inline(always)]
+            fn any(self) -> bool {
+                self.0.any()
+            }
+            #[inline(always)]
+            fn all(self) -> bool {
+                self.0.all()
+            }
+        }
+
+        impl Real for $name {
+            type Mask = $mask;
+            const LANES: usize = $n;
+
+            #[inline(always)]
+            fn splat(v: f64) -> Self {
+                <$w>::splat($narrow(v))
+            }
+            #[inline(always)]
+            fn lane(self, i: usize) -> f64 {
+                f64::from(self.as_array()[i])
+            }
+            #[inline(always)]
+            fn from_lanes(v: &[f64]) -> Self {
+                let mut a = [$narrow(0.0); $n];
+                for (i, x) in a.iter_mut().enumerate() {
+                    *x = $narrow(v[i.min(v.len() - 1)]);
+                }
+                <$w>::new(a)
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                <$w>::sqrt(self)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$w>::abs(self)
+            }
+            #[inline(always)]
+            fn min(self, o: Self) -> Self {
+                <$w>::fast_min(self, o)
+            }
+            #[inline(always)]
+            fn max(self, o: Self) -> Self {
+                <$w>::fast_max(self, o)
+            }
+            #[inline(always)]
+            fn floor(self) -> Self {
+                <$w>::floor(self)
+            }
+            #[inline(always)]
+            fn round(self) -> Self {
+                // wide rounds half to even; match f64::round (half away from zero).
+                let t = <$w>::trunc(self);
+                let frac = self - t;
+                let half = <$w>::splat(0.5);
+                let up = frac.abs().simd_ge(half);
+                up.select(t + self.signum(), t)
+            }
+            #[inline(always)]
+            fn sin(self) -> Self {
+                <$w>::sin(self)
+            }
+            #[inline(always)]
+            fn cos(self) -> Self {
+                <$w>::cos(self)
+            }
+            #[inline(always)]
+            fn sin_cos(self) -> (Self, Self) {
+                <$w>::sin_cos(self)
+            }
+            #[inline(always)]
+            fn acos(self) -> Self {
+                <$w>::acos(self)
+            }
+            #[inline(always)]
+            fn asin(self) -> Self {
+                <$w>::asin(self)
+            }
+            #[inline(always)]
+            fn atan2(self, x: Self) -> Self {
+                <$w>::atan2(self, x)
+            }
+            #[inline(always)]
+            fn ln(self) -> Self {
+                <$w>::ln(self)
+            }
+            #[inline(always)]
+            fn exp(self) -> Self {
+                <$w>::exp(self)
+            }
+            #[inline(always)]
+            fn powf(self, e: Self) -> Self {
+                (<$w>::ln(self) * e).exp()
+            }
+            #[inline(always)]
+            fn signum(self) -> Self {
+                <$w>::signum(self)
+            }
+            #[inline(always)]
+            fn lt(self, o: Self) -> $mask {
+                $mask(self.simd_lt(o))
+            }
+            #[inline(always)]
+            fn le(self, o: Self) -> $mask {
+                $mask(self.simd_le(o))
+            }
+            #[inline(always)]
+            fn gt(self, o: Self) -> $mask {
+                $mask(self.simd_gt(o))
+            }
+            #[inline(always)]
+            fn ge(self, o: Self) -> $mask {
+                $mask(self.simd_ge(o))
+            }
+            #[inline(always)]
+            fn is_finite(self) -> $mask {
+                $mask(<$w>::is_finite(self))
+            }
+            #[inline(always)]
+            fn select(m: $mask, a: Self, b: Self) -> Self {
+                m.0.select(a, b)
+            }
+        }
+    };
+}
+
+/// `f64` to `f32`, rounding (the f32 packet's lane conversion).
+#[inline(always)]
+fn narrow_f32(x: f64) -> f32 {
+    x as f32
+}
+
 /// Eight `f32` lanes (AVX2 on x86-64-v3), the packet type of the throughput path.
 pub type F32x8 = wide::f32x8;
+packet_real!(F32x8, wide::f32x8, Mask8, 8, narrow_f32);
 
-/// Lane mask of [`F32x8`]: all-ones bits in set lanes.
-#[derive(Clone, Copy, Debug)]
-pub struct Mask8(pub wide::f32x8);
-
-impl BitAnd for Mask8 {
-    type Output = Self;
-    #[inline(always)]
-    fn bitand(self, o: Self) -> Self {
-        Mask8(self.0 & o.0)
-    }
-}
-impl BitOr for Mask8 {
-    type Output = Self;
-    #[inline(always)]
-    fn bitor(self, o: Self) -> Self {
-        Mask8(self.0 | o.0)
-    }
-}
-impl Not for Mask8 {
-    type Output = Self;
-    #[inline(always)]
-    fn not(self) -> Self {
-        Mask8(!self.0)
-    }
-}
-impl Mask for Mask8 {
-    #[inline(always)]
-    fn any(self) -> bool {
-        self.0.any()
-    }
-    #[inline(always)]
-    fn all(self) -> bool {
-        self.0.all()
-    }
-}
-
-impl Real for F32x8 {
-    type Mask = Mask8;
-    const LANES: usize = 8;
-
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        wide::f32x8::splat(v as f32)
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> f64 {
-        self.as_array()[i] as f64
-    }
-    #[inline(always)]
-    fn from_lanes(v: &[f64]) -> Self {
-        let mut a = [0f32; 8];
-        for (i, x) in a.iter_mut().enumerate() {
-            *x = v[i.min(v.len() - 1)] as f32;
-        }
-        wide::f32x8::new(a)
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        wide::f32x8::sqrt(self)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        wide::f32x8::abs(self)
-    }
-    #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        wide::f32x8::fast_min(self, o)
-    }
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        wide::f32x8::fast_max(self, o)
-    }
-    #[inline(always)]
-    fn floor(self) -> Self {
-        wide::f32x8::floor(self)
-    }
-    #[inline(always)]
-    fn round(self) -> Self {
-        // wide rounds half to even; match f64::round (half away from zero).
-        let t = wide::f32x8::trunc(self);
-        let frac = self - t;
-        let half = wide::f32x8::splat(0.5);
-        let up = frac.abs().simd_ge(half);
-        up.select(t + self.signum(), t)
-    }
-    #[inline(always)]
-    fn sin(self) -> Self {
-        wide::f32x8::sin(self)
-    }
-    #[inline(always)]
-    fn cos(self) -> Self {
-        wide::f32x8::cos(self)
-    }
-    #[inline(always)]
-    fn sin_cos(self) -> (Self, Self) {
-        wide::f32x8::sin_cos(self)
-    }
-    #[inline(always)]
-    fn acos(self) -> Self {
-        wide::f32x8::acos(self)
-    }
-    #[inline(always)]
-    fn asin(self) -> Self {
-        wide::f32x8::asin(self)
-    }
-    #[inline(always)]
-    fn atan2(self, x: Self) -> Self {
-        wide::f32x8::atan2(self, x)
-    }
-    #[inline(always)]
-    fn ln(self) -> Self {
-        wide::f32x8::ln(self)
-    }
-    #[inline(always)]
-    fn exp(self) -> Self {
-        wide::f32x8::exp(self)
-    }
-    #[inline(always)]
-    fn powf(self, e: Self) -> Self {
-        (wide::f32x8::ln(self) * e).exp()
-    }
-    #[inline(always)]
-    fn signum(self) -> Self {
-        wide::f32x8::signum(self)
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> Mask8 {
-        Mask8(self.simd_lt(o))
-    }
-    #[inline(always)]
-    fn le(self, o: Self) -> Mask8 {
-        Mask8(self.simd_le(o))
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> Mask8 {
-        Mask8(self.simd_gt(o))
-    }
-    #[inline(always)]
-    fn ge(self, o: Self) -> Mask8 {
-        Mask8(self.simd_ge(o))
-    }
-    #[inline(always)]
-    fn is_finite(self) -> Mask8 {
-        Mask8(wide::f32x8::is_finite(self))
-    }
-    #[inline(always)]
-    fn select(m: Mask8, a: Self, b: Self) -> Self {
-        m.0.select(a, b)
-    }
-}
+/// Four `f64` lanes (AVX2). Its transcendental functions are `wide`'s, within a few ulps of
+/// libm's (tested below), so results are close to the `f64` path but not bit-identical.
+pub type F64x4 = wide::f64x4;
+packet_real!(F64x4, wide::f64x4, Mask4, 4, std::convert::identity);
 
 #[cfg(test)]
 mod tests {
@@ -414,6 +433,48 @@ mod tests {
             xs,
             1e-6,
         );
+    }
+
+    fn check_lanes4(f: impl Fn(F64x4) -> F64x4, g: impl Fn(f64) -> f64, xs: [f64; 4], tol: f64) {
+        let v = f(F64x4::from_lanes(&xs));
+        for (i, &x) in xs.iter().enumerate() {
+            let want = g(x);
+            let got = v.lane(i);
+            assert!(
+                (want - got).abs() <= tol * (1.0 + want.abs()),
+                "lane {i}: x={x} want {want} got {got}"
+            );
+        }
+    }
+
+    #[test]
+    fn f64_packet_functions_match_f64_to_a_few_ulps() {
+        for xs in [[-2.5, -1.5, -0.5, 0.0], [0.3, 0.5, 1.5, 2.49]] {
+            check_lanes4(<F64x4 as Real>::round, f64::round, xs, 0.0);
+            check_lanes4(<F64x4 as Real>::floor, f64::floor, xs, 0.0);
+            check_lanes4(<F64x4 as Real>::abs, f64::abs, xs, 0.0);
+            check_lanes4(<F64x4 as Real>::sin, f64::sin, xs, 1e-15);
+            check_lanes4(<F64x4 as Real>::cos, f64::cos, xs, 1e-15);
+            check_lanes4(
+                |v| Real::atan2(v, F64x4::splat(-0.7)),
+                |y| y.atan2(-0.7),
+                xs,
+                1e-15,
+            );
+        }
+        for unit in [[-1.0, -0.9, -0.5, 0.0], [0.1, 0.5, 0.99, 1.0]] {
+            check_lanes4(<F64x4 as Real>::acos, f64::acos, unit, 1e-15);
+        }
+        for pos in [[1e-3, 0.1, 0.5, 1.0], [2.0, 7.5, 100.0, 1e4]] {
+            check_lanes4(<F64x4 as Real>::ln, f64::ln, pos, 1e-15);
+            check_lanes4(<F64x4 as Real>::sqrt, f64::sqrt, pos, 0.0);
+            check_lanes4(
+                |v| Real::powf(v, F64x4::splat(8.0)),
+                |x| x.powf(8.0),
+                pos,
+                2e-14,
+            );
+        }
     }
 
     #[test]
