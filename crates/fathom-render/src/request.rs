@@ -87,7 +87,7 @@ impl Default for OctreeSettings {
             root: None,
             fit_half: 4.0,
             settle_frames: 400,
-            subdivide_ms: 12.0,
+            subdivide_ms: fathom_svo::explorer::DEFAULT_SUBDIVIDE_MS,
             unify_every: 4,
             beam: fathom_svo::explorer::DEFAULT_BEAM,
             beam_min: fathom_svo::explorer::DEFAULT_BEAM_MIN,

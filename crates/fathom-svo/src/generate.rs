@@ -23,6 +23,7 @@ use crate::node::{EMPTY, NONE, REQUESTED, VISITED, pack_rgb};
 use crate::octree::{BoxU, Octree};
 use fathom_core::dd::Dd;
 use fathom_core::eval::Evaluator;
+use fathom_core::real::{F64x4, Real};
 use fathom_core::registry::{Family, Quality};
 use fathom_core::scene::Scene;
 use fathom_core::shared::AO_SAMPLES;
@@ -60,10 +61,12 @@ pub struct Origin {
     pub deep: bool,
 }
 
-/// The evaluators one worker needs: f64 for shallow frames, double-double for deep ones.
+/// The evaluators one worker needs: f64 for shallow frames (one point, or four at once),
+/// double-double for deep ones.
 #[derive(Default)]
 pub struct Probe {
     f64: Evaluator<f64>,
+    x4: Evaluator<F64x4>,
     dd: Evaluator<Dd>,
 }
 
@@ -174,6 +177,24 @@ impl Shader {
         }
     }
 
+    /// The scene's distances at four points (relative to the origin): one evaluation of four
+    /// f64 lanes on shallow frames (2.7x the Mandelbulb's and 3.2x the Menger's scalar rate,
+    /// `fathom-core`'s `packet64` example; lanes within a few ulps of the scalar path), four
+    /// double-double ones on deep frames.
+    #[inline]
+    pub fn distance4(&self, pr: &mut Probe, q: [DVec3; 4]) -> [f64; 4] {
+        if self.origin.deep {
+            return q.map(|q| self.distance(pr, q));
+        }
+        let p = q.map(|q| self.origin.hi + q);
+        let lanes = |f: fn(&DVec3) -> f64| F64x4::from(p.each_ref().map(f));
+        let d = pr.x4.distance(
+            &self.tape,
+            V3::new(lanes(|v| v.x), lanes(|v| v.y), lanes(|v| v.z)),
+        );
+        std::array::from_fn(|i| d.lane(i))
+    }
+
     /// The scene's distance at `q` (relative to the origin).
     #[inline]
     pub fn distance(&self, pr: &mut Probe, q: DVec3) -> f64 {
@@ -279,9 +300,20 @@ impl Shader {
         // Distance-field ambient occlusion, as the tracer computes it.
         let range = 0.05 * self.view.scale;
         let (mut occ, mut w, mut wsum) = (0.0, 1.0, 0.0);
+        let at = |i: u32| range * (0.1 + 0.9 * i as f64 / (AO_SAMPLES - 1) as f64);
+        // The samples four at a time (the last packet padded by repeating its last point).
+        let mut ds = [0f64; AO_SAMPLES as usize];
+        for (j, chunk) in ds.chunks_mut(4).enumerate() {
+            let q: [DVec3; 4] = std::array::from_fn(|k| {
+                let i = (4 * j + k.min(chunk.len() - 1)) as u32;
+                p + n * at(i)
+            });
+            let d = self.distance4(ev, q);
+            chunk.copy_from_slice(&d[..chunk.len()]);
+        }
         for i in 0..AO_SAMPLES {
-            let hh = range * (0.1 + 0.9 * i as f64 / (AO_SAMPLES - 1) as f64);
-            let d = self.distance(ev, p + n * hh);
+            let hh = at(i);
+            let d = ds[i as usize];
             occ += (1.0 - d / hh).clamp(0.0, 1.0) * w;
             wsum += 0.7f64.powi(i as i32);
             w *= 0.7;
@@ -366,9 +398,10 @@ impl Shader {
             DVec3::new(-1.0, 1.0, -1.0),
             DVec3::new(1.0, 1.0, 1.0),
         ];
+        let d = self.distance4(ev, K.map(|k| p + k * e));
         let mut g = DVec3::ZERO;
-        for k in K {
-            g += k * self.distance(ev, p + k * e);
+        for (k, d) in K.into_iter().zip(d) {
+            g += k * d;
         }
         // For a linear field d = n . x the sum is 4 e n.
         let g = g / (4.0 * e);
@@ -569,5 +602,46 @@ pub fn init_root(tree: &mut Octree, sh: &Shader) {
     match sh.full(&mut ev, c, hd) {
         Some(v) => n.colour = sh.colour(&mut ev, c, tree.root_size * 0.5, &v),
         None => *n.flags.get_mut() |= EMPTY,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fathom_core::camera_path::path_preset;
+
+    #[test]
+    fn four_distances_at_once_match_one_at_a_time() {
+        // Shallow frames evaluate four f64 lanes at once: within a few ulps of the scalar
+        // path (the packet's transcendental functions are wide's, not libm's). Deep frames
+        // take the double-double path point by point: exactly the scalar values.
+        for name in ["mandelbulb", "menger"] {
+            let p = path_preset(name).unwrap();
+            let mut sh = Shader::new(&p.scene, DEFAULT_MARGIN).unwrap();
+            let t = p.path.target().unwrap();
+            let mut pr = Probe::new();
+            let q: [DVec3; 4] = std::array::from_fn(|k| {
+                t + DVec3::new(1e-3 * k as f64, -7e-4 * k as f64, 3e-4) - DVec3::splat(1e-4)
+            });
+            let four = sh.distance4(&mut pr, q);
+            for k in 0..4 {
+                let one = sh.distance(&mut pr, q[k]);
+                assert!(
+                    (four[k] - one).abs() <= 1e-13 * one.abs().max(1e-3),
+                    "{name} lane {k}: {} against {one}",
+                    four[k]
+                );
+            }
+            sh.origin = Origin {
+                hi: t,
+                lo: DVec3::splat(1e-20),
+                deep: true,
+            };
+            let q = q.map(|q| q - t);
+            let four = sh.distance4(&mut pr, q);
+            for k in 0..4 {
+                assert_eq!(four[k], sh.distance(&mut pr, q[k]), "{name} deep lane {k}");
+            }
+        }
     }
 }

@@ -99,8 +99,9 @@ pub struct ZoomArgs {
     /// Memory budget of the octree, e.g. 512M, 1G, or bytes.
     #[arg(long, default_value = "1G")]
     pub max_memory: String,
-    /// Subdivision time per frame in ms.
-    #[arg(long, default_value_t = 12.0)]
+    /// Subdivision time per frame in ms: more gives finer detail sooner, less a higher frame
+    /// rate.
+    #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_SUBDIVIDE_MS)]
     pub subdivide_ms: f64,
     /// Unify (unload bricks no ray visited) every this many frames, >= 1.
     #[arg(long, default_value_t = 4)]
