@@ -883,9 +883,9 @@ fn refine_tile(
 
 /// Default subdivision time per frame ([`ExplorerConfig::subdivide_ms`]), in milliseconds.
 /// 12 until 2026-12-03, when the colouring's normal and occlusion samples began to be
-/// evaluated four f64 lanes at a time: at 8 ms the 300-frame zooms to 1e15 split as many
-/// leaves a frame as they did at 12 (Menger 503-522 against 387-456, Mandelbulb 268-309
-/// against 256-289, two interleaved pairs) and the saving goes to the frame rate.
+/// evaluated four f64 lanes at a time: at 8 ms the 300-frame zooms to 1e15 split about as
+/// many leaves a frame as they did at 12 (Menger 360-522 against 317-456, Mandelbulb 223-309
+/// against 231-289, five interleaved pairs) and the saving goes to the frame rate.
 pub const DEFAULT_SUBDIVIDE_MS: f64 = 8.0;
 
 /// Default tile side of the beam start ([`ExplorerConfig::beam`]): 16-pixel tiles refined
