@@ -195,6 +195,22 @@ impl Shader {
         std::array::from_fn(|i| d.lane(i))
     }
 
+    /// The scene's distances at `N` points (relative to the origin), four at a time
+    /// ([`Shader::distance4`]; the last packet padded by repeating its last point) on shallow
+    /// frames, one by one on deep ones (no padding evaluated in double-double).
+    pub fn distances<const N: usize>(&self, pr: &mut Probe, q: &[DVec3; N]) -> [f64; N] {
+        if self.origin.deep {
+            return std::array::from_fn(|i| self.distance(pr, q[i]));
+        }
+        let mut out = [0f64; N];
+        for (j, chunk) in out.chunks_mut(4).enumerate() {
+            let four = std::array::from_fn(|k| q[(4 * j + k).min(N - 1)]);
+            let d = self.distance4(pr, four);
+            chunk.copy_from_slice(&d[..chunk.len()]);
+        }
+        out
+    }
+
     /// The scene's distance at `q` (relative to the origin).
     #[inline]
     pub fn distance(&self, pr: &mut Probe, q: DVec3) -> f64 {
@@ -212,7 +228,7 @@ impl Shader {
     #[inline]
     pub fn full(&self, ev: &mut Probe, c: DVec3, hd: f64) -> Option<fathom_core::Value<f64>> {
         let v = self.eval(ev, c);
-        if self.full_value(&v, c, hd) {
+        if self.full_distance(v.d, c, hd) {
             Some(v)
         } else {
             None
@@ -238,11 +254,11 @@ impl Shader {
         d <= 0.0 || d.is_nan()
     }
 
-    /// The full test on an evaluated value `v` at centre `c` (relative to the origin,
+    /// The full test on the distance `d` at centre `c` (relative to the origin,
     /// half-diagonal `hd`). The slack is a few units of the last place of the centre's
     /// coordinates: f64 ones, or double-double ones (2^-104 of the origin) on deep frames.
     #[inline]
-    pub fn full_value(&self, v: &fathom_core::Value<f64>, c: DVec3, hd: f64) -> bool {
+    pub fn full_distance(&self, d: f64, c: DVec3, hd: f64) -> bool {
         let o = &self.origin;
         let slack = if o.deep {
             8.0 * f64::EPSILON * c.abs().max_element()
@@ -251,7 +267,7 @@ impl Shader {
             8.0 * f64::EPSILON * (o.hi + c).abs().max_element().max(1.0)
         };
         // NaN counts as full: never a false negative.
-        v.d.is_nan() || v.d < hd * (1.0 + self.margin) + slack
+        d.is_nan() || d < hd * (1.0 + self.margin) + slack
     }
 
     /// Colour of a full voxel at world centre `c` (half side `h`) with value `v`: the sphere
@@ -264,13 +280,14 @@ impl Shader {
     /// footprint) once voxels are pixel sized. Shading at the surface rather than the centre keeps
     /// neighbouring voxels of a smooth surface from taking the gradient at different offsets
     /// from it, the grain of a field of pixel-sized cubes.
-    pub fn colour(&self, ev: &mut Probe, c: DVec3, h: f64, v: &fathom_core::Value<f64>) -> u32 {
+    pub fn colour(&self, ev: &mut Probe, c: DVec3, h: f64, d: f64) -> u32 {
         let h = h.max(1e-300);
-        let (p, v) = if self.gradient_shading && v.d.is_finite() {
-            self.surface_point(ev, c, h).unwrap_or((c, *v))
+        let found = if self.gradient_shading && d.is_finite() {
+            self.surface_point(ev, c, h)
         } else {
-            (c, *v)
+            None
         };
+        let (p, v) = found.unwrap_or_else(|| (c, self.eval(ev, c)));
         let mats = self.tape.materials();
         let pick = |id: f64| (id.max(0.0) as usize).min(mats.len().saturating_sub(1));
         let (albedo, spec, shin, mix) = match (mats.get(pick(v.id)), mats.get(pick(v.id2))) {
@@ -301,16 +318,10 @@ impl Shader {
         let range = 0.05 * self.view.scale;
         let (mut occ, mut w, mut wsum) = (0.0, 1.0, 0.0);
         let at = |i: u32| range * (0.1 + 0.9 * i as f64 / (AO_SAMPLES - 1) as f64);
-        // The samples four at a time (the last packet padded by repeating its last point).
-        let mut ds = [0f64; AO_SAMPLES as usize];
-        for (j, chunk) in ds.chunks_mut(4).enumerate() {
-            let q: [DVec3; 4] = std::array::from_fn(|k| {
-                let i = (4 * j + k.min(chunk.len() - 1)) as u32;
-                p + n * at(i)
-            });
-            let d = self.distance4(ev, q);
-            chunk.copy_from_slice(&d[..chunk.len()]);
-        }
+        let ds = self.distances(
+            ev,
+            &std::array::from_fn::<_, { AO_SAMPLES as usize }, _>(|i| p + n * at(i as u32)),
+        );
         for i in 0..AO_SAMPLES {
             let hh = at(i);
             let d = ds[i as usize];
@@ -423,6 +434,11 @@ pub struct Children {
 }
 
 /// Evaluates the 8 children of the leaf with box `b` (read-only; runs in parallel).
+///
+/// The children's centre distances are two four-lane evaluations, and on estimate scenes the
+/// parent's 3x3x3 corner lattice is seven (all 27 points at once, once any child fails the
+/// centre test) on shallow frames; on deep frames (double-double, point by point) the lattice
+/// is filled lazily, child by child, as far as each child's test needs it.
 pub fn eval_children(sh: &Shader, tree: &Octree, ev: &mut Probe, id: u32, b: BoxU) -> Children {
     let mut out = Children {
         id,
@@ -432,26 +448,44 @@ pub fn eval_children(sh: &Shader, tree: &Octree, ev: &mut Probe, id: u32, b: Box
     };
     let side = b.dim() * 0.5 * tree.root_size;
     let hd = side * 0.5 * 3f64.sqrt();
-    // Inside flags of the parent's 3x3x3 lattice (the children's corners), filled on demand.
-    let mut lattice = [None::<bool>; 27];
-    let h = b.dim() * 0.5;
-    for o in 0..8 {
-        let cb = b.child(o);
-        let c = tree.centre_local(&cb);
-        let v = sh.eval(ev, c);
-        let mut full = sh.full_value(&v, c, hd);
-        if !full && sh.corner_test {
-            full = (0..8).any(|k| {
-                let ijk = [0, 1, 2].map(|a| (o >> a & 1) + (k >> a & 1));
-                *lattice[ijk[0] + 3 * ijk[1] + 9 * ijk[2]].get_or_insert_with(|| {
-                    let u = [0, 1, 2].map(|a| b.min[a] + h * ijk[a] as f64);
-                    sh.inside(ev, tree.local_world(u))
-                })
-            });
-        }
-        if full {
+    let centres: [DVec3; 8] = std::array::from_fn(|o| tree.centre_local(&b.child(o)));
+    let d = sh.distances(ev, &centres);
+    for (o, (&c, &d)) in centres.iter().zip(&d).enumerate() {
+        if sh.full_distance(d, c, hd) {
             out.full |= 1 << o;
-            out.colours[o] = sh.colour(ev, c, side * 0.5, &v);
+        }
+    }
+    if out.full != 0xff && sh.corner_test {
+        // Inside flags of the parent's 3x3x3 lattice (the children's corners).
+        let h = b.dim() * 0.5;
+        let point = |i: usize| {
+            let ijk = [i % 3, i / 3 % 3, i / 9];
+            tree.local_world([0, 1, 2].map(|a| b.min[a] + h * ijk[a] as f64))
+        };
+        let mut lattice = [None::<bool>; 27];
+        if !sh.origin.deep {
+            let pts: [DVec3; 27] = std::array::from_fn(point);
+            let d = sh.distances(ev, &pts);
+            lattice = d.map(|d| Some(d <= 0.0 || d.is_nan()));
+        }
+        let by_centre = out.full;
+        for o in (0..8).filter(|o| by_centre >> o & 1 == 0) {
+            let inside = (0..8).any(|k| {
+                let i = [0, 1, 2]
+                    .map(|a| (o >> a & 1) + (k >> a & 1))
+                    .into_iter()
+                    .rev()
+                    .fold(0, |acc, x| 3 * acc + x);
+                *lattice[i].get_or_insert_with(|| sh.inside(ev, point(i)))
+            });
+            if inside {
+                out.full |= 1 << o;
+            }
+        }
+    }
+    for (o, (&c, &d)) in centres.iter().zip(&d).enumerate() {
+        if out.full >> o & 1 == 1 {
+            out.colours[o] = sh.colour(ev, c, side * 0.5, d);
         }
     }
     out
@@ -600,7 +634,7 @@ pub fn init_root(tree: &mut Octree, sh: &Shader) {
     let hd = tree.root_size * 0.5 * 3f64.sqrt();
     let n = &mut tree.nodes[0];
     match sh.full(&mut ev, c, hd) {
-        Some(v) => n.colour = sh.colour(&mut ev, c, tree.root_size * 0.5, &v),
+        Some(v) => n.colour = sh.colour(&mut ev, c, tree.root_size * 0.5, v.d),
         None => *n.flags.get_mut() |= EMPTY,
     }
 }
@@ -609,6 +643,56 @@ pub fn init_root(tree: &mut Octree, sh: &Shader) {
 mod tests {
     use super::*;
     use fathom_core::camera_path::path_preset;
+
+    #[test]
+    fn packet_children_tests_match_point_by_point_ones() {
+        // eval_children decides the 8 children from two packets of centres and, on estimate
+        // scenes, seven packets of the 3x3x3 corner lattice; point by point (f64), the same
+        // points must give the same full children on boxes down to the zoom target.
+        for name in ["mandelbulb", "menger"] {
+            let p = path_preset(name).unwrap();
+            let mut sh = Shader::new(&p.scene, DEFAULT_MARGIN).unwrap();
+            sh.gradient_shading = false;
+            let tree = Octree::new(DVec3::splat(-1.5), 3.0, 3, 1 << 12);
+            sh.origin.hi = tree.root_min;
+            let u = tree.to_u(p.path.target().unwrap());
+            let mut pr = Probe::new();
+            let (mut full, mut by_corner) = (0, 0);
+            let mut b = BoxU::ROOT;
+            for _ in 0..40 {
+                let got = eval_children(&sh, &tree, &mut pr, 0, b).full;
+                let side = b.dim() * 0.5 * tree.root_size;
+                let h = b.dim() * 0.5;
+                let inside = |pr: &mut Probe, ijk: [usize; 3]| {
+                    let q = [0, 1, 2].map(|a| b.min[a] + h * ijk[a] as f64);
+                    let d = sh.distance(pr, tree.local_world(q));
+                    d <= 0.0 || d.is_nan()
+                };
+                for o in 0..8 {
+                    let c = tree.centre_local(&b.child(o));
+                    let centre =
+                        sh.full_distance(sh.distance(&mut pr, c), c, side * 0.75f64.sqrt());
+                    let corner = sh.corner_test
+                        && (0..8).any(|k| {
+                            inside(&mut pr, [0, 1, 2].map(|a| (o >> a & 1) + (k >> a & 1)))
+                        });
+                    assert_eq!(
+                        got >> o & 1 == 1,
+                        centre || corner,
+                        "{name} depth {} child {o}",
+                        b.depth
+                    );
+                    full += (centre || corner) as u32;
+                    by_corner += (corner && !centre) as u32;
+                }
+                b = b.child(b.octant_of(u));
+            }
+            assert!(full >= 40, "{name}: {full} full children");
+            if name == "mandelbulb" {
+                assert!(by_corner > 0, "the corner lattice was never needed");
+            }
+        }
+    }
 
     #[test]
     fn four_distances_at_once_match_one_at_a_time() {
