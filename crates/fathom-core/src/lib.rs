@@ -18,6 +18,7 @@ pub mod camera;
 pub mod camera_path;
 pub mod combine;
 pub mod dd;
+pub mod dd4;
 pub mod docgen;
 pub mod eval;
 pub mod flight;

@@ -1,10 +1,11 @@
 //! The scalar abstraction every distance function is written against.
 //!
-//! Each primitive, operator and fractal is written once, generic over [`Real`]. Four types
+//! Each primitive, operator and fractal is written once, generic over [`Real`]. Five types
 //! implement it: `f64` (the exact scalar path used as the reference), [`F32x8`] (eight `f32`
 //! lanes evaluated together by AVX2, the throughput path), [`F64x4`] (four `f64` lanes, within
-//! a few ulps of `f64`: the octree's voxel colouring) and [`crate::dd::Dd`] (double-double,
-//! one lane, for zooms past f64 precision). Control flow
+//! a few ulps of `f64`: the octree's voxel colouring), [`crate::dd::Dd`] (double-double,
+//! one lane, for zooms past f64 precision) and [`crate::dd4::Dd4`] (four double-double lanes,
+//! the octree's deep frames). Control flow
 //! that depends on a value (a fold, a bailout) is written with masks and [`Real::select`], so the
 //! same source is branch-free on the packet path and an ordinary `if` on the scalar path.
 

@@ -5,6 +5,7 @@
 
 use clap::Args;
 use fathom_core::dd::{Dd, dd3};
+use fathom_core::dd4::Dd4;
 use fathom_core::presets::PRESETS;
 use fathom_core::{Evaluator, F32x8, Real, Scene, Tape, V3};
 use serde_json::json;
@@ -57,8 +58,9 @@ fn rate(secs: f64, mut f: impl FnMut()) -> f64 {
     calls as f64 / start.elapsed().as_secs_f64()
 }
 
-/// Evaluations per second on the f64 scalar, f32x8 packet and double-double paths.
-fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64, f64) {
+/// Evaluations per second on the f64 scalar, f32x8 packet, double-double and four-lane
+/// double-double paths.
+fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64, f64, f64) {
     let mut e64 = Evaluator::<f64>::new();
     let scalar = rate(secs, || {
         for p in pts {
@@ -88,7 +90,20 @@ fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64, f64) {
             black_box(edd.distance(tape, *p));
         }
     }) * pts.len() as f64;
-    (scalar, packet, dd)
+    let dd4_pts: Vec<V3<Dd4>> = dd_pts
+        .chunks_exact(4)
+        .map(|c| {
+            let lane = |f: fn(&V3<Dd>) -> Dd| Dd4::from_dd(std::array::from_fn(|k| f(&c[k])));
+            V3::new(lane(|p| p.x), lane(|p| p.y), lane(|p| p.z))
+        })
+        .collect();
+    let mut edd4 = Evaluator::<Dd4>::new();
+    let dd4 = rate(secs, || {
+        for p in &dd4_pts {
+            black_box(edd4.distance(tape, *p));
+        }
+    }) * (dd4_pts.len() * 4) as f64;
+    (scalar, packet, dd, dd4)
 }
 
 pub fn run(a: EvalArgs) -> Result<(), String> {
@@ -106,15 +121,18 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         let scene = fathom_core::presets::load(p.name).map_err(|e| e.to_string())?;
         let tape = Tape::compile(&scene).map_err(|e| format!("{}: {e}", p.name))?;
         let pts = sample_points(&scene, 4096);
-        let (scalar, packet, dd) = eval_rates(&tape, &pts, a.seconds);
+        let (scalar, packet, dd, dd4) = eval_rates(&tape, &pts, a.seconds);
         eprintln!(
-            "{:>18}: f64 {:>10.0}/s  f32x8 {:>11.0}/s  x{:.2}  dd {:>8.1} ns  x{:.2} of f64",
+            "{:>18}: f64 {:>10.0}/s  f32x8 {:>11.0}/s  x{:.2}  dd {:>8.1} ns  x{:.2} of f64  \
+             dd x4 {:>8.1} ns a lane  x{:.2} of f64",
             p.name,
             scalar,
             packet,
             packet / scalar,
             1e9 / dd,
-            scalar / dd
+            scalar / dd,
+            1e9 / dd4,
+            scalar / dd4
         );
         rows.push(json!({
             "preset": p.name,
@@ -125,6 +143,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "f64_ns_per_eval": (1e10 / scalar).round() / 10.0,
             "dd_ns_per_eval": (1e10 / dd).round() / 10.0,
             "dd_over_f64": (scalar / dd * 100.0).round() / 100.0,
+            "dd4_ns_per_lane": (1e10 / dd4).round() / 10.0,
+            "dd4_over_f64": (scalar / dd4 * 100.0).round() / 100.0,
         }));
     }
     let scene = fathom_core::scenes::hundred_node_scene();
