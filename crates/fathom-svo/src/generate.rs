@@ -276,7 +276,7 @@ impl Shader {
         d.is_nan() || d < hd * (1.0 + self.margin) + slack
     }
 
-    /// Colour of a full voxel at world centre `c` (half side `h`) with value `v`: the sphere
+    /// Colour of a full voxel at world centre `c` (half side `h`, centre distance `d`): the sphere
     /// tracer's shading (`fathom_trace::shade`: material and orbit-trap palette, distance-field
     /// ambient occlusion, hemisphere ambient, Blinn-Phong per light seen from [`Shader::view`])
     /// at the voxel's surface point, without soft shadows (a shadow ray per voxel would cost
