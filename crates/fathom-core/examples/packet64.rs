@@ -19,12 +19,6 @@ fn pack(c: &[[f64; 3]]) -> V3<F64x4> {
     V3::new(lanes(0), lanes(1), lanes(2))
 }
 
-/// Four double-double points as one packet.
-fn pack_dd(c: &[V3<Dd>]) -> V3<Dd4> {
-    let lanes = |f: fn(&V3<Dd>) -> Dd| Dd4::from_dd(std::array::from_fn(|k| f(&c[k])));
-    V3::new(lanes(|p| p.x), lanes(|p| p.y), lanes(|p| p.z))
-}
-
 /// Nanoseconds per point of `f` run over `n` points `reps` times.
 fn time(reps: usize, n: usize, mut f: impl FnMut()) -> f64 {
     let t0 = Instant::now();
@@ -102,13 +96,13 @@ fn main() {
         let mut dsum4 = 0.0;
         let dd4 = time(reps / 4, deep.len(), || {
             for c in deep.chunks_exact(4) {
-                let v = ed4.distance(&tape, pack_dd(c));
+                let v = ed4.distance(&tape, Dd4::pack(&[c[0], c[1], c[2], c[3]]));
                 dsum4 += (0..4).map(|i| v.lane(i)).sum::<f64>();
             }
         });
         let mut dworst: f64 = 0.0;
         for c in deep.chunks_exact(4) {
-            let v = ed4.distance(&tape, pack_dd(c));
+            let v = ed4.distance(&tape, Dd4::pack(&[c[0], c[1], c[2], c[3]]));
             for (i, q) in c.iter().enumerate() {
                 let s = ed1.distance(&tape, *q).hi;
                 dworst = dworst.max((v.lane(i) - s).abs() / s.abs().max(1e-300));

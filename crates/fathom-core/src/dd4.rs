@@ -18,6 +18,7 @@
 
 use crate::dd::Dd;
 use crate::real::{F64x4, Mask4, Real};
+use crate::vec3::V3;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// Four double-double numbers: lane `i` is `hi[i] + lo[i]`, normalised as [`Dd`] is.
@@ -84,6 +85,13 @@ impl Dd4 {
             hi: F64x4::from(v.map(|x| x.hi)),
             lo: F64x4::from(v.map(|x| x.lo)),
         }
+    }
+
+    /// Four double-double points as one point of packets (lane `k` is point `k`).
+    #[inline]
+    pub fn pack(p: &[V3<Dd>; 4]) -> V3<Dd4> {
+        let lanes = |f: fn(&V3<Dd>) -> Dd| Dd4::from_dd(p.each_ref().map(f));
+        V3::new(lanes(|v| v.x), lanes(|v| v.y), lanes(|v| v.z))
     }
 
     /// Lane `i` as a double-double.
@@ -371,7 +379,6 @@ impl Real for Dd4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::V3;
     use crate::eval::Evaluator;
     use crate::tape::Tape;
 
@@ -497,12 +504,7 @@ mod tests {
                         Dd::from(base[2]) + t * 2.0,
                     )
                 });
-                let q = V3::new(
-                    Dd4::from_dd(p.map(|p| p.x)),
-                    Dd4::from_dd(p.map(|p| p.y)),
-                    Dd4::from_dd(p.map(|p| p.z)),
-                );
-                let d4 = e4.distance(&tape, q);
+                let d4 = e4.distance(&tape, Dd4::pack(&p));
                 for (k, p) in p.into_iter().enumerate() {
                     let d1 = e1.distance(&tape, p);
                     assert!(

@@ -188,12 +188,9 @@ impl Shader {
     #[inline]
     pub fn distance4(&self, pr: &mut Probe, q: [DVec3; 4]) -> [f64; 4] {
         if self.origin.deep {
-            let p = q.map(|q| self.deep_point(q));
-            let lanes = |f: fn(&V3<Dd>) -> Dd| Dd4::from_dd(p.each_ref().map(f));
-            let d = pr.dd4.distance(
-                &self.tape,
-                V3::new(lanes(|v| v.x), lanes(|v| v.y), lanes(|v| v.z)),
-            );
+            let d = pr
+                .dd4
+                .distance(&self.tape, Dd4::pack(&q.map(|q| self.deep_point(q))));
             return std::array::from_fn(|i| d.lane(i));
         }
         let p = q.map(|q| self.origin.hi + q);
@@ -705,29 +702,23 @@ mod tests {
             let q: [DVec3; 4] = std::array::from_fn(|k| {
                 t + DVec3::new(1e-3 * k as f64, -7e-4 * k as f64, 3e-4) - DVec3::splat(1e-4)
             });
-            let four = sh.distance4(&mut pr, q);
-            for k in 0..4 {
-                let one = sh.distance(&mut pr, q[k]);
-                assert!(
-                    (four[k] - one).abs() <= 1e-13 * one.abs().max(1e-3),
-                    "{name} lane {k}: {} against {one}",
-                    four[k]
-                );
-            }
-            sh.origin = Origin {
+            let deep = Origin {
                 hi: t,
                 lo: DVec3::splat(1e-20),
                 deep: true,
             };
-            let q = q.map(|q| q - t);
-            let four = sh.distance4(&mut pr, q);
-            for k in 0..4 {
-                let one = sh.distance(&mut pr, q[k]);
-                assert!(
-                    (four[k] - one).abs() <= 1e-13 * one.abs().max(1e-3),
-                    "{name} deep lane {k}: {} against {one}",
-                    four[k]
-                );
+            for (origin, q) in [(sh.origin, q), (deep, q.map(|q| q - t))] {
+                sh.origin = origin;
+                let four = sh.distance4(&mut pr, q);
+                for k in 0..4 {
+                    let one = sh.distance(&mut pr, q[k]);
+                    assert!(
+                        (four[k] - one).abs() <= 1e-13 * one.abs().max(1e-3),
+                        "{name} lane {k} (deep {}): {} against {one}",
+                        origin.deep,
+                        four[k]
+                    );
+                }
             }
         }
     }

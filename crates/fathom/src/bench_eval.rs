@@ -92,10 +92,7 @@ fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64, f64, f64) 
     }) * pts.len() as f64;
     let dd4_pts: Vec<V3<Dd4>> = dd_pts
         .chunks_exact(4)
-        .map(|c| {
-            let lane = |f: fn(&V3<Dd>) -> Dd| Dd4::from_dd(std::array::from_fn(|k| f(&c[k])));
-            V3::new(lane(|p| p.x), lane(|p| p.y), lane(|p| p.z))
-        })
+        .map(|c| Dd4::pack(&[c[0], c[1], c[2], c[3]]))
         .collect();
     let mut edd4 = Evaluator::<Dd4>::new();
     let dd4 = rate(secs, || {
