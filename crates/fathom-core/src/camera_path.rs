@@ -565,8 +565,8 @@ mod tests {
         let d = |q: DVec3| tape.eval_f64([q.x, q.y, q.z]).d;
         // Outside, and a few ulps further along the view is inside: the target is on the
         // surface to f64 precision. (The estimator's set is the points that do not escape in
-        // 12 iterations; just outside it the estimate is ~7e-7, inside it is 0, so "on the
-        // surface" means bracketed, not a distance near 0.)
+        // 12 iterations; the estimate is signed across its surface, so bracketed means a
+        // change of sign within a few ulps.)
         let eps = 4.0 * f64::EPSILON * target.abs().max_element().max(1.0);
         assert!(d(target) > 0.0, "target inside: {}", d(target));
         assert!(

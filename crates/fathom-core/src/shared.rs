@@ -25,6 +25,12 @@ pub const PREPASS_COARSEST: u32 = 8;
 pub const NO_TRAP: f64 = 1e3;
 /// Squared escape radius of the IFS fractals' fold loops.
 pub const IFS_BAIL2: f64 = 1e8;
+/// How far below zero the Mandelbulb's estimate goes inside its set (fractal units): far
+/// above the scales where the inside distance matters (within a few voxels of the surface,
+/// below 1e-7 for the preset), far below the steps of a sphere tracer or a Lipschitz check
+/// (the preset's pixels are ~1e-3 wide), so the estimate stays 1-Lipschitz in the interior
+/// (`fractals/mandelbulb.rs`).
+pub const INSIDE_DEPTH: f64 = 1e-6;
 /// Guard against division by zero in primitives (denominators are clamped to it).
 pub const TINY: f64 = 1e-30;
 /// Depth of the interpreter's point and value stacks.
@@ -79,6 +85,7 @@ pub const WGSL_CONSTANTS: &[WgslConstant] = &[
     f("NO_TRAP", NO_TRAP),
     f("IFS_BAIL2", IFS_BAIL2),
     f("TINY", TINY),
+    f("INSIDE_DEPTH", INSIDE_DEPTH),
     u("MAX_STACK", MAX_STACK as u32),
     u("MAX_EXECUTED", MAX_EXECUTED as u32),
 ];

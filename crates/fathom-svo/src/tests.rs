@@ -326,12 +326,22 @@ fn careful_depth(tape: &fathom_core::Tape, cam: &Camera, d: DVec3, pa: f64) -> O
     None
 }
 
+/// How many pixel footprints in front of the careful tracer's surface the octree's may lie
+/// in the deep Mandelbulb zoom (see `mandelbulb_deep_zoom_matches_a_careful_tracer`).
+const FRONT_FOOTPRINTS: f64 = 6.0;
+
 #[test]
 fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
-    // Deep in the Mandelbulb zoom the estimator is ~7e-7 just outside its set and 0 inside,
-    // far more than a voxel: voxels whose centre is outside must still be full when a corner
-    // is inside, and rays at voxel edges must not bounce between two leaves. Every pixel's
-    // depth must match a careful tracer within 2 % (both traversals, identical images).
+    // Deep in the Mandelbulb zoom the estimator was ~7e-7 just outside its set and 0 inside:
+    // voxels whose centre is outside must still be full when a corner is inside, and rays at
+    // voxel edges must not bounce between two leaves. No pixel may lie behind the careful
+    // tracer's surface by more than 2 % (a hole: before the corner test, rays hit structure
+    // 100x further away). Since the estimate is first-order at the surface (2026-12-04) the
+    // centre test finds it too, and as everywhere on the Mandelbulb the estimate's
+    // conservative margin (0.13-2.3x the distance on most lines, fathom-core's fractal
+    // tests) puts the octree's surface up to a few voxels in front: measured 1.0-5.3 % of the
+    // depth (1-5.2 footprints, median 3.3) at frames 200 and 299, asserted within
+    // FRONT_FOOTPRINTS. Both traversals give identical images.
     let p = path_preset("mandelbulb").unwrap();
     let tape = fathom_core::Tape::compile(&p.scene).unwrap();
     let (w, h) = (96u32, 72u32);
@@ -347,17 +357,31 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
         let f = cam.frame();
         let pa = f.pixel_angle(h);
         let mut bad = 0;
+        let mut errs = Vec::new();
         for y in 0..h {
             for x in 0..w {
                 let d = f.ray_dir(x as f64 + 0.5, y as f64 + 0.5, w, h);
                 let want =
                     careful_depth(&tape, &cam, d, pa).expect("the zoom looks at the surface");
                 let got = img.depth[(y * w + x) as usize] as f64;
-                if (got - want).abs() > 0.02 * want || got.is_nan() {
+                errs.push((got - want) / want);
+                // Behind the surface: a hole; in front by more than the estimate's margin:
+                // a fattened surface.
+                if got > want * 1.02 || got < want * (1.0 - FRONT_FOOTPRINTS * pa) || got.is_nan() {
                     bad += 1;
                 }
             }
         }
+        errs.sort_by(f64::total_cmp);
+        eprintln!(
+            "frame {frame}: depth error / depth: 5 % {:.4}, median {:.4}, 95 % {:.4}, range \
+             {:.4} to {:.4}; pixel footprint {pa:.4}",
+            errs[errs.len() / 20],
+            errs[errs.len() / 2],
+            errs[errs.len() * 19 / 20],
+            errs[0],
+            errs[errs.len() - 1]
+        );
         assert_eq!(
             bad,
             0,

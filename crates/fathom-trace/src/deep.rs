@@ -19,10 +19,9 @@
 //!   through holes smaller than a pixel that those renderers draw as surface: with a thousandth
 //!   of a footprint, the menger preset at 48x36 has 889 hit pixels against the ordinary
 //!   tracer's 944 (IoU 0.94). The rule scales with the view, so a view scaled by `s` about a
-//!   fixed point of the fractal gives depths scaled by `s`. For the Mandelbulb the estimate
-//!   just outside its set is ~7e-7 of the view scale at the zoom target (`docs/svo.md`, "The
-//!   Mandelbulb zoom target"), so at deep zoom a ray stops either inside the set (`d == 0`) or
-//!   on the footprint rule;
+//!   fixed point of the fractal gives depths scaled by `s`. The Mandelbulb's estimate is
+//!   signed and first-order at its surface at any depth (`fractals/mandelbulb.rs`), so deep
+//!   rays stop on the footprint rule near it, or inside after an overestimated step;
 //! - **miss** beyond `far` or when the step budget runs out.
 //!
 //! The march is generic over [`Real`] ([`march_depths`]) so the same rule can run in f64, which

@@ -107,7 +107,8 @@ pub fn sample(
 
 /// Samples `tape`'s signed distance (world units, negative inside) at the voxel centres of a
 /// `res` grid over `bbox`, for export as a distance volume rather than a density. Escape-time
-/// estimators give 0 inside, so their interiors read 0, not a negative depth.
+/// estimators do not measure depth inside (the Mandelbulb's is held at -1e-6 there, the
+/// Mandelbox's stays a small positive `r / dr`), so their interiors read about 0.
 pub fn sample_distance(
     tape: &Tape,
     res: [u32; 3],

@@ -38,8 +38,12 @@ crate::declare_family! {
     fn estimate(p: V3<S>) -> (S, S);
 
     /// The Mandelbulb (White and Nylander), classic acos/atan2 spherical form, with the
-    /// running-derivative distance estimate `0.5 ln(r) r / dr` times `safety`; a point that
-    /// never escapes counts as inside (estimate 0). At `power = 8` an exact trig-free form
+    /// running-derivative distance estimate `0.5 ln(r) r / dr` times `safety`. Near the
+    /// surface of the set the iterations define (points that escape at the last iteration, or
+    /// never: inside) it is `0.5 ln(r / bailout) r / dr`, signed and zero on that surface, so
+    /// the surface stays smooth at any zoom (inside it is held at -1e-6, `INSIDE_DEPTH`; the
+    /// plain estimate never fell below ~7e-7 outside and read 0 inside, a step whose normals
+    /// were noise at zooms past ~1e6). At `power = 8` an exact trig-free form
     /// (repeated complex squaring) is used instead; it is the same map. The angle offsets
     /// (Mandelbulber's alpha and beta, in this colatitude convention) turn each iteration's
     /// angles before the power; at zero they leave the classic bulb.

@@ -43,6 +43,9 @@ fn frac_Mandelbulb(c: vec3f, power: f32, iterations: u32, bailout: f32, safety: 
     var r = length(z);
     var trap = r;
     var live = r < bailout;
+    // Escaped at the last iteration (with none, the ball is the set): with the points that
+    // never escape, measured from the set's own surface, ln(r / bailout) (see `iterate`).
+    var last = iterations == 0u && !live;
     for (var i = 0u; i < iterations; i++) {
         if !live {
             break;
@@ -58,9 +61,13 @@ fn frac_Mandelbulb(c: vec3f, power: f32, iterations: u32, bailout: f32, safety: 
         r = length(z);
         trap = min(trap, r);
         live = r < bailout;
+        last = !live && i + 1u == iterations;
     }
-    let d = 0.5 * log(max(r, 1e-30)) * r / dr;
-    return vec2f(select(d, 0.0, live) * safety, trap);
+    let rr = max(r, 1e-30);
+    // ln(r / bailout) r / dr near the set's surface (f32 needs no series: the CPU's is for
+    // double-double depths).
+    let d = select(0.5 * log(rr), log(rr / bailout), live || last) * rr / dr;
+    return vec2f(select(d, max(d, -INSIDE_DEPTH), live) * safety, trap);
 }
 
 // --- Mandelbox (fractals/mandelbox.rs) ---
