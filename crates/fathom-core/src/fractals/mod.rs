@@ -40,13 +40,13 @@ crate::declare_family! {
     /// The Mandelbulb (White and Nylander), classic acos/atan2 spherical form, with the
     /// running-derivative distance estimate `0.5 ln(r) r / dr` times `safety`. Near the
     /// surface of the set the iterations define (points that escape at the last iteration, or
-    /// never: inside) it is `0.5 ln(r / bailout) r / dr`, signed and zero on that surface, so
-    /// the surface stays smooth at any zoom (inside it is held at -1e-6, `INSIDE_DEPTH`; the
-    /// plain estimate never fell below ~7e-7 outside and read 0 inside, a step whose normals
-    /// were noise at zooms past ~1e6). At `power = 8` an exact trig-free form
-    /// (repeated complex squaring) is used instead; it is the same map. The angle offsets
-    /// (Mandelbulber's alpha and beta, in this colatitude convention) turn each iteration's
-    /// angles before the power; at zero they leave the classic bulb.
+    /// never: inside) it is `ln(r / bailout) r / dr` (no 0.5: a first-order distance), signed
+    /// and zero on that surface, so the surface stays smooth at any zoom (inside it is held at
+    /// -1e-6, `INSIDE_DEPTH`; the plain estimate never fell below ~7e-7 outside and read 0
+    /// inside, a step whose normals were noise at zooms past ~1e6). At `power = 8` an exact
+    /// trig-free form (repeated complex squaring) is used instead; it is the same map. The
+    /// angle offsets (Mandelbulber's alpha and beta, in this colatitude convention) turn each
+    /// iteration's angles before the power; at zero they leave the classic bulb.
     /// Not a strict bound: on random pairs `|f(a) - f(b)| / |a - b|` is heavy-tailed (about
     /// 1.4e-4 of pairs exceed 1 at safety 1, the worst seen grows with the sample: 13 in
     /// 600 000 pairs); the default `safety` 0.8 brings the exceeding fraction near 1e-4.
