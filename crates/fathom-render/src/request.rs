@@ -76,6 +76,9 @@ pub struct OctreeSettings {
     pub beam: u32,
     /// Finest side the beam tiles are refined to (quadrants), [1, 256].
     pub beam_min: u32,
+    /// Draw leaves wider than a pixel with their surface planes instead of as cubes
+    /// ([`fathom_svo::plane`]).
+    pub planes: bool,
 }
 
 impl Default for OctreeSettings {
@@ -91,6 +94,7 @@ impl Default for OctreeSettings {
             unify_every: 4,
             beam: fathom_svo::explorer::DEFAULT_BEAM,
             beam_min: fathom_svo::explorer::DEFAULT_BEAM_MIN,
+            planes: false,
         }
     }
 }
@@ -323,6 +327,7 @@ impl RenderRequest {
             unify_every: o.unify_every,
             beam: o.beam,
             beam_min: o.beam_min,
+            planes: o.planes,
             root: match o.root {
                 Some(c) => RootSpec::from_cube(Some(c)),
                 None => RootSpec::Fit { half: o.fit_half },

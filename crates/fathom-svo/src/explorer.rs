@@ -81,6 +81,11 @@ pub struct ExplorerConfig {
     /// parent's start with a beam of its own corners, while the quadrants are at least this
     /// wide (`beam` or more: one level of tiles).
     pub beam_min: u32,
+    /// Draw full leaves wider than a pixel with their surface planes ([`crate::plane`])
+    /// instead of as cubes: a zoom's frames show surfaces instead of staircases while detail
+    /// arrives, at the cost of the steps rays take through the leaves whose planes they pass
+    /// (`docs/svo.md`, "Surface planes").
+    pub planes: bool,
 }
 
 impl Default for ExplorerConfig {
@@ -105,6 +110,7 @@ impl Default for ExplorerConfig {
             root: RootSpec::default(),
             beam: DEFAULT_BEAM,
             beam_min: DEFAULT_BEAM_MIN,
+            planes: false,
         }
     }
 }
@@ -308,6 +314,9 @@ impl Explorer {
             })?;
         let (root_min, root_size) = pool.install(|| cfg.root.resolve(&shader));
         let mut tree = Octree::new(root_min, root_size, cfg.brick_period, max_nodes);
+        if cfg.planes {
+            tree.plane_px = 1.0;
+        }
         let mut shader = shader;
         shader.origin = Origin {
             hi: root_min,

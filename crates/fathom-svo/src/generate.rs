@@ -21,6 +21,7 @@
 use crate::evict::{free_children, mark_visited};
 use crate::node::{EMPTY, NONE, REQUESTED, VISITED, pack_rgb};
 use crate::octree::{BoxU, Octree};
+use crate::plane::SurfacePlane;
 use fathom_core::dd::Dd;
 use fathom_core::dd4::Dd4;
 use fathom_core::eval::Evaluator;
@@ -283,7 +284,10 @@ impl Shader {
     /// footprint) once voxels are pixel sized. Shading at the surface rather than the centre keeps
     /// neighbouring voxels of a smooth surface from taking the gradient at different offsets
     /// from it, the grain of a field of pixel-sized cubes.
-    pub fn colour(&self, ev: &mut Probe, c: DVec3, h: f64, d: f64) -> u32 {
+    ///
+    /// Also returns the voxel's [`SurfacePlane`]: through the surface point, with the normal
+    /// the colour was shaded with (none with flat colours or where no surface point was found).
+    pub fn colour(&self, ev: &mut Probe, c: DVec3, h: f64, d: f64) -> (u32, SurfacePlane) {
         let h = h.max(1e-300);
         let found = if self.gradient_shading && d.is_finite() {
             self.surface_point(ev, c, h)
@@ -314,9 +318,15 @@ impl Shader {
             albedo[i] + (pc - albedo[i]) * mix
         });
         if !self.gradient_shading {
-            return pack_rgb(base);
+            return (pack_rgb(base), SurfacePlane::NONE);
         }
-        let n = self.gradient(ev, p, h).normalize_or(DVec3::Y);
+        let g = self.gradient(ev, p, h);
+        let plane = if found.is_some() {
+            SurfacePlane::new(g, p, c, h)
+        } else {
+            SurfacePlane::NONE
+        };
+        let n = g.normalize_or(DVec3::Y);
         // Distance-field ambient occlusion, as the tracer computes it.
         let range = 0.05 * self.view.scale;
         let (mut occ, mut w, mut wsum) = (0.0, 1.0, 0.0);
@@ -347,7 +357,7 @@ impl Shader {
                 col[i] += (base[i] + sp) * lc[i] * ndl;
             }
         }
-        pack_rgb(col)
+        (pack_rgb(col), plane)
     }
 }
 
@@ -434,6 +444,8 @@ pub struct Children {
     pub full: u8,
     /// Colours of the full children.
     pub colours: [u32; 8],
+    /// Surface planes of the full children.
+    pub planes: [SurfacePlane; 8],
 }
 
 /// Evaluates the 8 children of the leaf with box `b` (read-only; runs in parallel).
@@ -448,6 +460,7 @@ pub fn eval_children(sh: &Shader, tree: &Octree, ev: &mut Probe, id: u32, b: Box
         b,
         full: 0,
         colours: [0; 8],
+        planes: [SurfacePlane::NONE; 8],
     };
     let side = b.dim() * 0.5 * tree.root_size;
     let hd = side * 0.5 * 3f64.sqrt();
@@ -480,7 +493,7 @@ pub fn eval_children(sh: &Shader, tree: &Octree, ev: &mut Probe, id: u32, b: Box
     }
     for (o, (&c, &d)) in centres.iter().zip(&d).enumerate() {
         if out.full >> o & 1 == 1 {
-            out.colours[o] = sh.colour(ev, c, side * 0.5, d);
+            (out.colours[o], out.planes[o]) = sh.colour(ev, c, side * 0.5, d);
         }
     }
     out
@@ -535,6 +548,11 @@ pub fn apply(tree: &mut Octree, r: &Children) -> Outcome {
         c.idle = 0;
         let full = r.full >> o & 1 == 1;
         c.colour = if full { r.colours[o as usize] } else { 0 };
+        c.plane = if full {
+            r.planes[o as usize]
+        } else {
+            SurfacePlane::NONE
+        };
         // New nodes count as visited so the next unification does not unload them unseen.
         *c.flags.get_mut() = if full { 0 } else { EMPTY } | VISITED;
         for a in 0..3 {
@@ -629,7 +647,7 @@ pub fn init_root(tree: &mut Octree, sh: &Shader) {
     let hd = tree.root_size * 0.5 * 3f64.sqrt();
     let n = &mut tree.nodes[0];
     match sh.full(&mut ev, c, hd) {
-        Some(v) => n.colour = sh.colour(&mut ev, c, tree.root_size * 0.5, v.d),
+        Some(v) => (n.colour, n.plane) = sh.colour(&mut ev, c, tree.root_size * 0.5, v.d),
         None => *n.flags.get_mut() |= EMPTY,
     }
 }

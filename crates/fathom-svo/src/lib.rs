@@ -4,7 +4,8 @@
 //! skip node, brick-based not-recently-used unification) with the frame phased so that no frame
 //! ever sees a half-updated octree. See `docs/svo.md` for the design.
 //!
-//! - [`node`]: the arena node (44 bytes) and its flags;
+//! - [`node`]: the arena node (48 bytes) and its flags;
+//! - [`plane`]: the surface plane a full leaf wider than a pixel is drawn with;
 //! - [`octree`]: the arena of nodes, free list of child blocks, exact lattice cells, boxes
 //!   relative to the anchor near the eye, counts;
 //! - [`root`]: the root cube, fitted to the scene's bounds or given;
@@ -30,6 +31,7 @@ pub mod generate;
 pub mod node;
 pub mod octree;
 pub mod outline;
+pub mod plane;
 pub mod precision;
 pub mod ray_grid;
 pub mod root;

@@ -4,7 +4,7 @@
 //! node live in one block of 8 consecutive slots, so a node stores only the id of its first
 //! child; the octant of a node is `id & 7`.
 //!
-//! Bytes per node (`size_of::<Node>() == 44`, checked by a test):
+//! Bytes per node (`size_of::<Node>() == 48`, checked by a test):
 //!
 //! | field        | bytes | why                                                           |
 //! |--------------|-------|---------------------------------------------------------------|
@@ -13,6 +13,7 @@
 //! | `parent`     | 4     | recombination, ascent during traversal and skip-node updates  |
 //! | `brick`      | 4     | id of the brick representative (nearest brick ancestor)       |
 //! | `colour`     | 4     | RGBA8; inner nodes hold the average of their full children   |
+//! | `plane`      | 4     | a full leaf's surface plane ([`SurfacePlane`]), drawn when wide |
 //! | `depth`      | 1     | level below the root (box size is `2^-depth` of the root)     |
 //! | `flags`      | 1     | empty / requested / visited / free                            |
 //! | `idle`       | 1     | unifications a brick has gone unvisited (unloaded at a limit) |
@@ -22,6 +23,7 @@
 //! child array); positions are not stored: boxes are recomputed exactly from the depth during
 //! traversal (all coordinates are dyadic in root units).
 
+use crate::plane::SurfacePlane;
 use std::sync::atomic::{AtomicU8, AtomicU32, Ordering::Relaxed};
 
 /// The null node id.
@@ -54,6 +56,9 @@ pub struct Node {
     pub brick: u32,
     /// RGBA8 colour of a full leaf, or the average of the children of an inner node.
     pub colour: u32,
+    /// The surface plane a full leaf is drawn with while it is wider than a pixel (kept by
+    /// inner nodes, which become leaves again when their brick is unloaded).
+    pub plane: SurfacePlane,
     /// Depth below the root.
     pub depth: u8,
     /// [`EMPTY`], [`REQUESTED`], [`VISITED`], [`FREE`].
@@ -73,6 +78,7 @@ impl Node {
             parent: NONE,
             brick: NONE,
             colour: 0,
+            plane: SurfacePlane::NONE,
             depth: 0,
             flags: AtomicU8::new(FREE),
             idle: 0,
@@ -166,8 +172,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn node_is_44_bytes() {
-        assert_eq!(std::mem::size_of::<Node>(), 44);
+    fn node_is_48_bytes() {
+        assert_eq!(std::mem::size_of::<Node>(), 48);
     }
 
     #[test]

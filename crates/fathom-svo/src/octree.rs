@@ -368,6 +368,10 @@ pub struct Octree {
     pub max_nodes: usize,
     /// What [`BoxU`] coordinates are measured from (moved only between frames).
     pub anchor: Anchor,
+    /// Full leaves wider than this many pixels are drawn with their surface plane
+    /// ([`crate::plane`]); narrower ones, and all with `f64::INFINITY` (the default), as
+    /// cubes.
+    pub plane_px: f64,
     counts: Counts,
 }
 
@@ -388,6 +392,7 @@ impl Octree {
             brick_period: brick_period.max(1),
             max_nodes: max_nodes.max(9),
             anchor: Anchor::default(),
+            plane_px: f64::INFINITY,
             counts: Counts {
                 nodes: 1,
                 bricks: 0,

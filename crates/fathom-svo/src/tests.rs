@@ -470,3 +470,67 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
         check(&ex.tree).unwrap();
     }
 }
+
+#[test]
+fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
+    // Early in a zoom most leaves are wider than a pixel. On one coarse tree (a dozen frames
+    // of 100 subdivisions at an early view of the Mandelbulb zoom), the same leaves drawn as
+    // cubes and drawn with their surface planes, against the depths of a settled tree (every
+    // visible leaf at most a pixel: planes unused). The planes' depths must lie much closer,
+    // the silhouette must not get worse, and both traversals must give identical images.
+    let p = path_preset("mandelbulb").unwrap();
+    let (w, h) = (80u32, 60u32);
+    let mut c = cfg(w, h);
+    c.root = RootSpec::from_cube(p.cube);
+    c.planes = true;
+    let cam = p.camera(60, 300, 1e11);
+    let mut settled = Explorer::new(&p.scene, c.clone()).unwrap();
+    settled.settle(&cam, 300);
+    let want = render_with(&mut settled, &cam, Traversal::Neighbour);
+    assert!(want.largest_voxel_px <= 1.0, "the reference did not settle");
+    c.subdivide_ms = 0.0;
+    c.min_subdivisions = 100;
+    let mut ex = Explorer::new(&p.scene, c).unwrap();
+    for _ in 0..12 {
+        ex.step(&cam);
+    }
+    ex.tree.plane_px = f64::INFINITY;
+    let cubes = render_with(&mut ex, &cam, Traversal::Neighbour);
+    ex.tree.plane_px = 1.0;
+    let planes = render_with(&mut ex, &cam, Traversal::Neighbour);
+    let kd = render_with(&mut ex, &cam, Traversal::KdRestart);
+    assert_eq!(planes, kd, "traversals differ with planes");
+    let mut err = [Vec::new(), Vec::new()];
+    let mut union_inter = [[0usize; 2]; 2];
+    for (i, &t) in want.depth.iter().enumerate() {
+        let want_hit = t.is_finite();
+        for (k, img) in [&cubes, &planes].into_iter().enumerate() {
+            let got = img.depth[i];
+            let hit = got.is_finite();
+            union_inter[k][0] += (hit || want_hit) as usize;
+            union_inter[k][1] += (hit && want_hit) as usize;
+            if hit && want_hit {
+                err[k].push(((got - t).abs() / t) as f64);
+            }
+        }
+    }
+    let med = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (ec, ep) = (med(&mut err[0]), med(&mut err[1]));
+    let iou = union_inter.map(|[u, i]| i as f64 / u.max(1) as f64);
+    eprintln!(
+        "largest voxel {:.1} px; median depth error / depth: cubes {ec:.4}, planes {ep:.4}; \
+         silhouette IoU: cubes {:.4}, planes {:.4}",
+        cubes.largest_voxel_px, iou[0], iou[1]
+    );
+    assert!(cubes.largest_voxel_px > 4.0, "the tree is not coarse");
+    assert!(ep < 0.5 * ec, "planes {ep} vs cubes {ec}");
+    assert!(
+        iou[1] >= iou[0] - 0.005,
+        "IoU planes {} vs cubes {}",
+        iou[1],
+        iou[0]
+    );
+}

@@ -216,11 +216,14 @@ fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
 }
 
 /// The leaf (or LOD-terminating inner node) handling shared by both traversals. Returns the
-/// hit when the ray stops here.
+/// hit when the ray stops here: a full leaf wider than the ray's pixel is met where the ray
+/// meets its solid part ([`crate::plane::SurfacePlane::meet`]), and passed through when it misses it (it
+/// still asks for the leaf's subdivision).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn stop_here(
     tree: &Octree,
+    r: &Ray,
     id: u32,
     b: &BoxU,
     t: f64,
@@ -239,11 +242,17 @@ fn stop_here(
     if n.is_empty() {
         return None;
     }
-    if b.dim() > t * lod && b.depth < tree.depth_limit() && n.claim(REQUESTED) {
-        reqs.push(Request { id, b: *b, t });
+    let mut t_hit = t;
+    if b.dim() > t * lod {
+        if b.depth < tree.depth_limit() && n.claim(REQUESTED) {
+            reqs.push(Request { id, b: *b, t });
+        }
+        if n.plane.is_some() && b.dim() > t * lod * tree.plane_px {
+            t_hit = n.plane.meet(r, b, t)?;
+        }
     }
     Some(Hit {
-        t,
+        t: t_hit,
         colour: n.colour,
         node: id,
         steps,
@@ -365,7 +374,7 @@ fn walk(
             set_entry(entry, id, b.min[0], b.min[1], b.min[2], b.depth);
             first = false;
         }
-        if let Some(h) = stop_here(tree, id, &b, t, lod, steps, &mut last_brick, reqs) {
+        if let Some(h) = stop_here(tree, r, id, &b, t, lod, steps, &mut last_brick, reqs) {
             return h;
         }
         if steps > MAX_STEPS {
@@ -457,7 +466,7 @@ pub fn cast_kdrestart(tree: &Octree, r: &Ray, eye_inside: bool, reqs: &mut Vec<R
             b = b.child(o);
             steps += 1;
         }
-        if let Some(h) = stop_here(tree, id, &b, t, lod, steps, &mut last_brick, reqs) {
+        if let Some(h) = stop_here(tree, r, id, &b, t, lod, steps, &mut last_brick, reqs) {
             return h;
         }
         if steps > MAX_STEPS {

@@ -115,6 +115,14 @@ pub struct ZoomArgs {
     /// down to this side in pixels (the --beam value: one level).
     #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_BEAM_MIN)]
     pub beam_min: u32,
+    /// Draw voxels wider than a pixel as the surface plane through them (shaded where the
+    /// line of sight meets the surface, with the distance gradient there as normal) instead
+    /// of as cubes: while detail arrives the zoom shows a faceted surface instead of a
+    /// staircase of cubes, closer to the sphere tracer (Mandelbulb to 1e15: median SSIM
+    /// 0.74 to 0.92), at about half the frame rate (rays step through the leaves whose
+    /// planes they pass).
+    #[arg(long)]
+    pub planes: bool,
     /// Screen-space ambient occlusion strength applied to written frames (the sphere
     /// tracer's post effect), [0, 4].
     #[arg(long, default_value_t = 1.0)]
@@ -209,6 +217,7 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
                 unify_every: a.unify_every,
                 beam: a.beam,
                 beam_min: a.beam_min,
+                planes: a.planes,
                 ..OctreeSettings::default()
             },
             ..RenderRequest::default()
