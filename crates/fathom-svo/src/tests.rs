@@ -474,7 +474,7 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
 #[test]
 fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
     // Early in a zoom most leaves are wider than a pixel. On one coarse tree (a dozen frames
-    // of 100 subdivisions at an early view of the Mandelbulb zoom), the same leaves drawn as
+    // of 50 subdivisions at a view of the Mandelbulb zoom), the same leaves drawn as
     // cubes and drawn with their surface planes, against the depths of a settled tree (every
     // visible leaf at most a pixel: planes unused). The planes' depths must lie much closer,
     // the silhouette must not get worse, and both traversals must give identical images.
@@ -483,23 +483,49 @@ fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
     let mut c = cfg(w, h);
     c.root = RootSpec::from_cube(p.cube);
     c.planes = true;
-    let cam = p.camera(60, 300, 1e11);
+    let cam = p.camera(150, 300, 1e11);
     let mut settled = Explorer::new(&p.scene, c.clone()).unwrap();
     settled.settle(&cam, 300);
     let want = render_with(&mut settled, &cam, Traversal::Neighbour);
     assert!(want.largest_voxel_px <= 1.0, "the reference did not settle");
     c.subdivide_ms = 0.0;
-    c.min_subdivisions = 100;
+    c.min_subdivisions = 50;
     let mut ex = Explorer::new(&p.scene, c).unwrap();
     for _ in 0..12 {
         ex.step(&cam);
     }
+    assert!(
+        ex.skip().is_some(),
+        "the eye must be inside the root (beams)"
+    );
     ex.tree.plane_px = f64::INFINITY;
     let cubes = render_with(&mut ex, &cam, Traversal::Neighbour);
     ex.tree.plane_px = 1.0;
     let planes = render_with(&mut ex, &cam, Traversal::Neighbour);
     let kd = render_with(&mut ex, &cam, Traversal::KdRestart);
     assert_eq!(planes, kd, "traversals differ with planes");
+    // Beam starts: the same image and the same requests as rays from the skip node, in
+    // fewer steps.
+    let asked = |ex: &mut Explorer, beam: (u32, u32)| {
+        ex.cfg.traversal = Traversal::Neighbour;
+        ex.cfg.beam = beam.0;
+        ex.cfg.beam_min = beam.1;
+        let (img, reqs, c) = ex.render(&cam);
+        ex.release_requests(&reqs);
+        let mut ids: Vec<u32> = reqs.iter().map(|r| r.id).collect();
+        ids.sort_unstable();
+        (img, ids, c[2])
+    };
+    let (plain, plain_ids, plain_steps) = asked(&mut ex, (0, 1));
+    let (beamed, beamed_ids, beamed_steps) = asked(&mut ex, (16, 4));
+    assert_eq!(plain, planes, "the beams changed the image");
+    assert_eq!(beamed, planes, "the beams changed the image");
+    assert_eq!(plain_ids, beamed_ids, "the beams changed the requests");
+    eprintln!("steps: from the skip node {plain_steps}, from the beams {beamed_steps}");
+    assert!(
+        beamed_steps < plain_steps,
+        "{beamed_steps} vs {plain_steps} steps"
+    );
     let mut err = [Vec::new(), Vec::new()];
     let mut union_inter = [[0usize; 2]; 2];
     for (i, &t) in want.depth.iter().enumerate() {
