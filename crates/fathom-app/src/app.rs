@@ -91,6 +91,8 @@ pub struct ViewSettings {
     pub stereo: Stereo,
     pub eye_separation: f64,
     pub fidelity: f64,
+    /// Octree leaves wider than a pixel drawn as surfaces instead of cubes (slower).
+    pub planes: bool,
     /// Density grid, extinction, albedo and samples of the volume renderer (the scene as a
     /// cloud).
     pub volume: fathom_render::request::VolumeSettings,
@@ -116,6 +118,7 @@ impl ViewSettings {
             ..RenderRequest::default()
         };
         r.octree.fidelity = self.fidelity;
+        r.octree.planes = self.planes;
         r.volume = self.volume.clone();
         r
     }
@@ -277,6 +280,7 @@ impl ExplorerApp {
                 stereo: Stereo::Mono,
                 eye_separation: 0.065,
                 fidelity: 1.0,
+                planes: false,
                 volume: Default::default(),
             },
             viewport: Viewport::new(opts.target_ms),
@@ -1075,6 +1079,10 @@ impl ExplorerApp {
                 egui::Slider::new(&mut s.fidelity, 0.25..=16.0)
                     .logarithmic(true)
                     .text("voxel size (px)"),
+            );
+            ui.checkbox(&mut s.planes, "surface planes").on_hover_text(
+                "Draw voxels still wider than a pixel as the surface through them instead \
+                     of as cubes: smoother while detail arrives, slower (rebuilds the tree)",
             );
         }
         if s.backend == Backend::Volume {
