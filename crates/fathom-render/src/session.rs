@@ -326,6 +326,23 @@ impl Session {
         Ok(ob.step(&scene, camera, deep, req, want_frame))
     }
 
+    /// Builds the octree for `req` if needed and settles it at the deep camera for at most
+    /// `budget_ms` (see `fathom_svo::Explorer::settle_within`); returns the frames taken.
+    pub fn warm_octree(
+        &mut self,
+        camera: &Camera,
+        deep: &fathom_svo::DeepEye,
+        req: &RenderRequest,
+        budget_ms: f64,
+    ) -> Result<usize, RenderError> {
+        req.validate()?;
+        camera.validate()?;
+        let scene = scene_for(&self.scene, req);
+        let key = self.shading_generation;
+        let ob = OctreeBackend::get(&mut self.octree, &scene, key, req, &mut self.counters)?;
+        Ok(ob.explorer.settle_within(camera, deep, budget_ms))
+    }
+
     /// The octree explorer, if one is built.
     pub fn octree(&self) -> Option<&fathom_svo::Explorer> {
         self.octree.as_ref().map(|o| &o.explorer)

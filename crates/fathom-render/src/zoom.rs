@@ -37,6 +37,9 @@ pub struct Zoom {
     pub request: RenderRequest,
     /// Compare every this many frames with the sphere tracer (and the last frame); 0: never.
     pub compare_every: usize,
+    /// Before the first frame, settle the octree at its camera for at most this many
+    /// milliseconds (not counted in the frames' times; 0: start from the root cube).
+    pub warmup_ms: f64,
 }
 
 /// One frame of a zoom compared with the sphere tracer at the same camera.
@@ -71,6 +74,8 @@ pub enum ZoomError {
     Depth(f64),
     #[error("--frames {0} is out of range 1..=10000000")]
     Frames(usize),
+    #[error("--warmup-ms {0} is out of range 0..=600000")]
+    Warmup(f64),
     #[error(transparent)]
     Render(#[from] RenderError),
     /// `--pixel` names a pixel outside the image.
@@ -367,6 +372,9 @@ pub fn near_surface_point(tape: &Tape, eye: DVec3, dir: DVec3) -> Option<DVec3> 
     None
 }
 
+/// Longest warm start a zoom accepts, in milliseconds ([`Zoom::warmup_ms`]).
+pub const MAX_WARMUP_MS: f64 = 600_000.0;
+
 /// The JSON written by `fathom zoom --stats`.
 #[derive(Serialize)]
 pub struct ZoomReport {
@@ -379,6 +387,9 @@ pub struct ZoomReport {
     pub fidelity: f64,
     /// Why the zoom stopped early (precision limit), if it did.
     pub stopped: Option<String>,
+    /// The warm start before the first frame: wall time and settling frames.
+    pub warmup_ms: f64,
+    pub warmup_frames: usize,
     pub summary: Summary,
     pub zoom: Vec<f64>,
     pub frames: Vec<FrameStats>,
@@ -394,6 +405,9 @@ impl Zoom {
         }
         if self.frames == 0 || self.frames > 10_000_000 {
             return Err(ZoomError::Frames(self.frames));
+        }
+        if !(self.warmup_ms.is_finite() && (0.0..=MAX_WARMUP_MS).contains(&self.warmup_ms)) {
+            return Err(ZoomError::Warmup(self.warmup_ms));
         }
         Ok(())
     }
@@ -428,6 +442,14 @@ impl Zoom {
         let mut frames = Vec::with_capacity(self.frames);
         let mut zooms = Vec::with_capacity(self.frames);
         let mut stopped = None;
+        let (warmup_frames, warmup_ms) = if self.warmup_ms > 0.0 {
+            let t0 = std::time::Instant::now();
+            let (cam, deep) = preset.deep_camera(0, self.frames, self.depth);
+            let n = session.warm_octree(&cam, &deep, &req, self.warmup_ms)?;
+            (n, t0.elapsed().as_secs_f64() * 1e3)
+        } else {
+            (0, 0.0)
+        };
         for i in 0..self.frames {
             let (cam, deep) = preset.deep_camera(i, self.frames, self.depth);
             let z = preset.path.zoom_at(i, self.frames, self.depth);
@@ -503,6 +525,8 @@ impl Zoom {
             threads: cfg.threads,
             fidelity: cfg.fidelity,
             stopped,
+            warmup_ms,
+            warmup_frames,
             summary,
             zoom: zooms,
             frames,

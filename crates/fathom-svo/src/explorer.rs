@@ -782,6 +782,27 @@ impl Explorer {
         (img, stats)
     }
 
+    /// Renders and subdivides at a fixed camera (eye known as [`DeepEye`]) until no leaf asks
+    /// for subdivision or `budget_ms` of wall time has passed (the last subdivision gets
+    /// what is left of it); returns the frames taken. A zoom's warm start: its first frame
+    /// then shows the scene, not the root cube.
+    pub fn settle_within(&mut self, cam: &Camera, deep: &DeepEye, budget_ms: f64) -> usize {
+        let t0 = Instant::now();
+        let mut frames = 0;
+        loop {
+            let left = budget_ms - t0.elapsed().as_secs_f64() * 1e3;
+            if left <= 0.0 {
+                return frames;
+            }
+            let (_, reqs, _) = self.render_deep(cam, deep);
+            if reqs.is_empty() {
+                return frames;
+            }
+            self.subdivide(reqs, left);
+            frames += 1;
+        }
+    }
+
     /// Renders and subdivides at a fixed camera until no leaf asks for subdivision (or
     /// `max_frames` pass); returns the frames taken.
     pub fn settle(&mut self, cam: &Camera, max_frames: usize) -> usize {

@@ -180,6 +180,8 @@ fn zoom(t: Traversal, frames: usize, depth: f64, size: &str) -> Result<Zoom, Str
             ..RenderRequest::default()
         },
         compare_every: 0,
+        // The frame rates measure the zoom itself, from the root cube as they always have.
+        warmup_ms: 0.0,
     })
 }
 
@@ -563,6 +565,8 @@ mod tests {
             threads: 1,
             fidelity: 1.0,
             stopped: None,
+            warmup_ms: 0.0,
+            warmup_frames: 0,
             summary: Default::default(),
             zoom: zoom.clone(),
             frames: frames.clone(),
