@@ -309,6 +309,31 @@ impl Session {
         req: &RenderRequest,
         want_frame: bool,
     ) -> Result<(Option<Frame>, FrameStats), RenderError> {
+        let (scene, ob) = self.octree_at(camera, deep, req)?;
+        Ok(ob.step(&scene, camera, deep, req, want_frame))
+    }
+
+    /// Builds the octree for `req` if needed and settles it at the deep camera for at most
+    /// `budget_ms` (`fathom_svo::Explorer::settle_deep`); returns the frames taken.
+    pub fn warm_octree(
+        &mut self,
+        camera: &Camera,
+        deep: &fathom_svo::DeepEye,
+        req: &RenderRequest,
+        budget_ms: f64,
+    ) -> Result<usize, RenderError> {
+        let (_, ob) = self.octree_at(camera, deep, req)?;
+        Ok(ob.explorer.settle_deep(camera, deep, usize::MAX, budget_ms))
+    }
+
+    /// Checks the request, camera and deep eye, and returns the scene with the request's
+    /// overrides and the octree for them (built when either changed).
+    fn octree_at(
+        &mut self,
+        camera: &Camera,
+        deep: &fathom_svo::DeepEye,
+        req: &RenderRequest,
+    ) -> Result<(Cow<'_, Scene>, &mut OctreeBackend), RenderError> {
         req.validate()?;
         camera.validate()?;
         let lo = deep.eye_lo;
@@ -323,24 +348,7 @@ impl Session {
         let scene = scene_for(&self.scene, req);
         let key = self.shading_generation;
         let ob = OctreeBackend::get(&mut self.octree, &scene, key, req, &mut self.counters)?;
-        Ok(ob.step(&scene, camera, deep, req, want_frame))
-    }
-
-    /// Builds the octree for `req` if needed and settles it at the deep camera for at most
-    /// `budget_ms` (see `fathom_svo::Explorer::settle_within`); returns the frames taken.
-    pub fn warm_octree(
-        &mut self,
-        camera: &Camera,
-        deep: &fathom_svo::DeepEye,
-        req: &RenderRequest,
-        budget_ms: f64,
-    ) -> Result<usize, RenderError> {
-        req.validate()?;
-        camera.validate()?;
-        let scene = scene_for(&self.scene, req);
-        let key = self.shading_generation;
-        let ob = OctreeBackend::get(&mut self.octree, &scene, key, req, &mut self.counters)?;
-        Ok(ob.explorer.settle_within(camera, deep, budget_ms))
+        Ok((scene, ob))
     }
 
     /// The octree explorer, if one is built.

@@ -783,37 +783,35 @@ impl Explorer {
     }
 
     /// Renders and subdivides at a fixed camera (eye known as [`DeepEye`]) until no leaf asks
-    /// for subdivision or `budget_ms` of wall time has passed (the last subdivision gets
-    /// what is left of it); returns the frames taken. A zoom's warm start: its first frame
-    /// then shows the scene, not the root cube.
-    pub fn settle_within(&mut self, cam: &Camera, deep: &DeepEye, budget_ms: f64) -> usize {
+    /// for subdivision, `max_frames` pass or `budget_ms` of wall time has passed (the last
+    /// subdivision gets what is left of it); returns the frames taken. With a time budget
+    /// alone, a zoom's warm start: its first frame then shows the scene, not the root cube.
+    pub fn settle_deep(
+        &mut self,
+        cam: &Camera,
+        deep: &DeepEye,
+        max_frames: usize,
+        budget_ms: f64,
+    ) -> usize {
         let t0 = Instant::now();
-        let mut frames = 0;
-        loop {
+        for i in 0..max_frames {
             let left = budget_ms - t0.elapsed().as_secs_f64() * 1e3;
             if left <= 0.0 {
-                return frames;
+                return i;
             }
             let (_, reqs, _) = self.render_deep(cam, deep);
             if reqs.is_empty() {
-                return frames;
+                return i;
             }
             self.subdivide(reqs, left);
-            frames += 1;
         }
+        max_frames
     }
 
     /// Renders and subdivides at a fixed camera until no leaf asks for subdivision (or
     /// `max_frames` pass); returns the frames taken.
     pub fn settle(&mut self, cam: &Camera, max_frames: usize) -> usize {
-        for i in 0..max_frames {
-            let (_, reqs, _) = self.render(cam);
-            if reqs.is_empty() {
-                return i;
-            }
-            self.subdivide(reqs, f64::INFINITY);
-        }
-        max_frames
+        self.settle_deep(cam, &DeepEye::of(cam), max_frames, f64::INFINITY)
     }
 }
 

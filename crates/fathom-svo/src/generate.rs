@@ -548,11 +548,8 @@ pub fn apply(tree: &mut Octree, r: &Children) -> Outcome {
         c.idle = 0;
         let full = r.full >> o & 1 == 1;
         c.colour = if full { r.colours[o as usize] } else { 0 };
-        c.plane = if full {
-            r.planes[o as usize]
-        } else {
-            SurfacePlane::NONE
-        };
+        // Empty children's planes are `NONE` (eval_children sets only the full ones').
+        c.plane = r.planes[o as usize];
         // New nodes count as visited so the next unification does not unload them unseen.
         *c.flags.get_mut() = if full { 0 } else { EMPTY } | VISITED;
         for a in 0..3 {

@@ -147,19 +147,9 @@ impl SurfacePlane {
             return None;
         }
         let tc = t + above / towards;
-        // Leaving the box: the nearest far face along the ray.
-        let far = |a: usize| {
-            if r.d[a] == 0.0 {
-                return f64::INFINITY;
-            }
-            let face = if r.d[a] > 0.0 {
-                b.min[a] + 2.0 * h
-            } else {
-                b.min[a]
-            };
-            (face - r.o[a]) * r.inv[a]
-        };
-        let exit = far(0).min(far(1)).min(far(2));
+        // Leaving the box: the traversal's own exit distance (`tc > t` here, so its floor
+        // at `t` changes nothing).
+        let exit = crate::traverse::exit(r, b, t).0;
         (tc <= exit).then_some(tc)
     }
 }

@@ -174,7 +174,7 @@ fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
 
 /// Exit distance of the ray from box `b`, the exit face, and the point just across it.
 #[inline(always)]
-fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
+pub(crate) fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
     let s = b.dim();
     let mut best = f64::INFINITY;
     let mut axis = 0;
