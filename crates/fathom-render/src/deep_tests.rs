@@ -125,7 +125,7 @@ fn zoom_comparisons_use_the_double_double_reference_when_deep() {
         compare_every: 3,
         warmup_ms: 0.0,
     };
-    let r = z.run(&p, false, |_, _, _, _| Ok(())).unwrap();
+    let r = z.run(&p, false, |_| Ok(())).unwrap();
     assert!(r.stopped.is_none(), "{:?}", r.stopped);
     let mut deep = 0;
     for c in &r.compare {

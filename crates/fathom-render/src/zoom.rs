@@ -42,6 +42,21 @@ pub struct Zoom {
     pub warmup_ms: f64,
 }
 
+/// What [`Zoom::run`] hands its caller after each frame.
+pub struct ZoomFrame<'a> {
+    /// Frame number from 0.
+    pub index: usize,
+    /// Zoom factor of the frame.
+    pub zoom: f64,
+    /// The finished image, when the caller asked for frames.
+    pub image: Option<&'a Frame>,
+    /// The frame's octree figures.
+    pub stats: &'a FrameStats,
+    /// On frames compared with the sphere tracer: the octree frame as compared (reduced like
+    /// the reference on deep frames, see [`FrameComparison::reduced`]) and the tracer's.
+    pub compared: Option<(&'a Frame, &'a Frame)>,
+}
+
 /// One frame of a zoom compared with the sphere tracer at the same camera.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameComparison {
@@ -412,8 +427,8 @@ impl Zoom {
         Ok(())
     }
 
-    /// Runs the zoom along `preset`'s path. `on_frame(i, zoom, frame, stats)` sees every frame;
-    /// `frame` is the finished image when `want_frames`, else `None`.
+    /// Runs the zoom along `preset`'s path. `on_frame` sees every frame ([`ZoomFrame`]: its
+    /// image when `want_frames`, and on compared frames the two images compared).
     pub fn run<F>(
         &self,
         preset: &ZoomPath,
@@ -421,7 +436,7 @@ impl Zoom {
         mut on_frame: F,
     ) -> Result<ZoomReport, ZoomError>
     where
-        F: FnMut(usize, f64, Option<&Frame>, &FrameStats) -> Result<(), String>,
+        F: FnMut(&ZoomFrame) -> Result<(), String>,
     {
         self.validate()?;
         let mut req = self.request.clone();
@@ -471,6 +486,7 @@ impl Zoom {
                 self.compare_every > 0 && (i % self.compare_every == 0 || i + 1 == self.frames);
             let (frame, st) =
                 session.step_octree_deep(&cam, &deep, &req, want_frames || compare_now)?;
+            let mut compared = None;
             if let (true, Some(r), Some(f)) = (compare_now, reference.as_mut(), frame.as_ref()) {
                 let t0 = std::time::Instant::now();
                 let deep_ref = if preset.is_deep(&deep) {
@@ -478,10 +494,12 @@ impl Zoom {
                 } else {
                     None
                 };
-                let (agreement, reference, reduced) = match deep_ref {
-                    Some((traced, k)) => (agreement(&reduce(f, k), &traced), "double-double", k),
-                    None => (agreement(f, &r.frame(&cam)?), "f64", 1),
+                let (octree, traced, reference, reduced) = match deep_ref {
+                    Some((traced, k)) => (reduce(f, k), traced, "double-double", k),
+                    None => (f.clone(), r.frame(&cam)?, "f64", 1),
                 };
+                let agreement = agreement(&octree, &traced);
+                compared = Some((octree, traced));
                 compare.push(FrameComparison {
                     frame: i,
                     zoom: z,
@@ -508,8 +526,14 @@ impl Zoom {
                     side,
                 });
             }
-            let shown = if want_frames { frame.as_ref() } else { None };
-            on_frame(i, z, shown, &st).map_err(ZoomError::Output)?;
+            on_frame(&ZoomFrame {
+                index: i,
+                zoom: z,
+                image: if want_frames { frame.as_ref() } else { None },
+                stats: &st,
+                compared: compared.as_ref().map(|(a, b)| (a, b)),
+            })
+            .map_err(ZoomError::Output)?;
             frames.push(st);
             zooms.push(z);
         }

@@ -204,7 +204,7 @@ fn zoom(t: Traversal, frames: usize, depth: f64, size: &str) -> Result<Zoom, Str
 /// Runs a zoom of `preset` without writing frames.
 fn run_zoom(preset: &str, z: &Zoom) -> Result<ZoomReport, String> {
     let p = path_preset(preset).map_err(|e| e.to_string())?;
-    z.run(&p.into(), false, |_, _, _, _| Ok(()))
+    z.run(&p.into(), false, |_| Ok(()))
         .map_err(|e| e.to_string())
 }
 

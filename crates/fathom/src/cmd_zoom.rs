@@ -50,6 +50,7 @@ impl From<TraversalArg> for Traversal {
 ///   fathom zoom --preset sierpinski --pixel 320,160 --depth 1e9 -o frames/
 ///   fathom zoom my-scene.ron --toward 0.3,0.2,1 --depth 1e8 --stats z.json
 ///   fathom zoom --preset mandelbulb --compare-every 10 --stats z.json   (vs the tracer)
+///   fathom zoom --preset mandelbulb --compare-every 50 --compare-images cmp/   (both, side by side)
 ///   fathom zoom --preset mandelbulb --frames 600 -o frames/        (PNG per frame)
 ///   fathom zoom --preset menger --traversal kdrestart --stats kd.json   (the baseline)
 ///   fathom zoom --preset menger-tour --frames 900 --size 1280x720 -o tour/
@@ -138,6 +139,11 @@ pub struct ZoomArgs {
     /// in the zoom's frame times, but it slows the run).
     #[arg(long, default_value_t = 0)]
     pub compare_every: usize,
+    /// With --compare-every: write each compared frame into this directory as
+    /// compare_NNNNN.png, the octree's frame on the left and the sphere tracer's on the right
+    /// (deep frames at the reduced size they are compared at).
+    #[arg(long, value_name = "DIR")]
+    pub compare_images: Option<PathBuf>,
     /// Render farm: render shard I of N of the zoom's frames into the job directory -o DIR,
     /// each frame a settled still on a fresh octree (so it does not depend on the frames
     /// before it; slower than the stepped zoom, and not the same images). Without a value:
@@ -239,17 +245,33 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
 /// unless `quiet`. Returns the report.
 pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
     let z = zoom(a)?;
+    if a.compare_images.is_some() && a.compare_every == 0 {
+        return Err(
+            "--compare-images needs --compare-every N (N >= 1): only compared frames have a \
+             tracer image"
+                .into(),
+        );
+    }
     let preset = zoom_path(a)?;
-    if let Some(dir) = &a.output {
+    for dir in [&a.output, &a.compare_images].into_iter().flatten() {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
+    let write = |f: &fathom_core::frame::Frame, path: &std::path::Path| {
+        let file = fathom_trace::output::open_output(path).map_err(|e| e.to_string())?;
+        fathom_trace::output::save_colour(f, file, path).map_err(|e| e.to_string())
+    };
     let report = z
-        .run(&preset, a.output.is_some(), |i, zoom, frame, st| {
-            if let (Some(dir), Some(f)) = (&a.output, frame) {
-                let path = dir.join(format!("frame_{i:05}.png"));
-                let file = fathom_trace::output::open_output(&path).map_err(|e| e.to_string())?;
-                fathom_trace::output::save_colour(f, file, &path).map_err(|e| e.to_string())?;
+        .run(&preset, a.output.is_some(), |zf| {
+            let (i, zoom, st) = (zf.index, zf.zoom, zf.stats);
+            if let (Some(dir), Some(f)) = (&a.output, zf.image) {
+                write(f, &dir.join(format!("frame_{i:05}.png")))?;
+            }
+            if let (Some(dir), Some((octree, traced))) = (&a.compare_images, zf.compared) {
+                write(
+                    &side_by_side(octree, traced),
+                    &dir.join(format!("compare_{i:05}.png")),
+                )?;
             }
             if !quiet && (i % 100 == 0 || i + 1 == a.frames) {
                 eprintln!(
@@ -264,6 +286,23 @@ pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
         eprintln!("fathom: stopped: {e}");
     }
     Ok(report)
+}
+
+/// Gap in pixels between the two images of a comparison.
+const COMPARE_GAP: u32 = 4;
+
+/// `left` and `right` side by side on black, `COMPARE_GAP` pixels apart (a comparison image).
+fn side_by_side(
+    left: &fathom_core::frame::Frame,
+    right: &fathom_core::frame::Frame,
+) -> fathom_core::frame::Frame {
+    let mut f = fathom_core::frame::Frame::new(
+        left.width + COMPARE_GAP + right.width,
+        left.height.max(right.height),
+    );
+    f.paste(left, 0, 0);
+    f.paste(right, left.width + COMPARE_GAP, 0);
+    f
 }
 
 pub fn run(a: ZoomArgs) -> Result<(), String> {
@@ -417,6 +456,41 @@ mod tests {
             assert!(!c0[key].is_null(), "{key} missing in {c0}");
         }
         assert!(json["frames"][0]["largest_voxel_px"].is_number());
+        // The compared images, side by side: the octree's left, the tracer's right, the
+        // figures above measured on exactly these (SSIM of the halves' luminance, within the
+        // 8-bit rounding of the written PNG).
+        let dir = std::env::temp_dir().join(format!("fathom-compare-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        a.compare_images = Some(dir.clone());
+        let r = run_zoom(&a, true).unwrap();
+        for c in &r.compare {
+            let img = image::open(dir.join(format!("compare_{:05}.png", c.frame)))
+                .unwrap()
+                .to_rgb8();
+            assert_eq!(img.dimensions(), (32 + COMPARE_GAP + 32, 24));
+            let lum = |x0: u32| -> Vec<f64> {
+                (0..24)
+                    .flat_map(|y| (0..32).map(move |x| (x, y)))
+                    .map(|(x, y)| {
+                        let p = img.get_pixel(x0 + x, y).0.map(|v| v as f64 / 255.0);
+                        0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+                    })
+                    .collect()
+            };
+            let ssim = fathom_render::compare::ssim(&lum(0), &lum(32 + COMPARE_GAP), 32, 24);
+            assert!(
+                (ssim - c.agreement.ssim).abs() < 0.01,
+                "frame {}: halves' SSIM {ssim} against the reported {}",
+                c.frame,
+                c.agreement.ssim
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+        // Images without comparisons are refused, naming the flag that is missing.
+        a.compare_every = 0;
+        let e = run_zoom(&a, true).err().unwrap();
+        assert!(e.contains("--compare-every"), "{e}");
+        a.compare_images = None;
         // Off by default: no tracer frames.
         a.compare_every = 0;
         assert!(run_zoom(&a, true).unwrap().compare.is_empty());
