@@ -24,6 +24,7 @@ use fathom_svo::stats::Summary;
 use fathom_svo::{DeepEye, FrameStats, Traversal};
 use glam::DVec3;
 use serde::Serialize;
+use std::borrow::Cow;
 
 /// A zoom to run.
 #[derive(Clone, Debug)]
@@ -494,9 +495,11 @@ impl Zoom {
                 } else {
                     None
                 };
+                // The octree frame as compared: reduced like the double-double reference,
+                // else the frame itself (borrowed: no copy for the callback).
                 let (octree, traced, reference, reduced) = match deep_ref {
-                    Some((traced, k)) => (reduce(f, k), traced, "double-double", k),
-                    None => (f.clone(), r.frame(&cam)?, "f64", 1),
+                    Some((traced, k)) => (Cow::Owned(reduce(f, k)), traced, "double-double", k),
+                    None => (Cow::Borrowed(f), r.frame(&cam)?, "f64", 1),
                 };
                 let agreement = agreement(&octree, &traced);
                 compared = Some((octree, traced));
@@ -531,7 +534,7 @@ impl Zoom {
                 zoom: z,
                 image: if want_frames { frame.as_ref() } else { None },
                 stats: &st,
-                compared: compared.as_ref().map(|(a, b)| (a, b)),
+                compared: compared.as_ref().map(|(a, b)| (a.as_ref(), b)),
             })
             .map_err(ZoomError::Output)?;
             frames.push(st);
