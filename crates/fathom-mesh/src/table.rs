@@ -140,9 +140,32 @@ fn build_case(mask: usize) -> Case {
         // Inside on the left, seen from outside the cell, runs clockwise around the outward
         // normal; reversed, the loop's fan faces outward.
         lp.reverse();
+        // Marching cubes fans each loop from its first edge. A fan diagonal between two edges
+        // of one cube face could be drawn by the neighbour across that face too (a loop that
+        // crosses an ambiguous face twice), and more than two triangles would share it; start the fan
+        // where none of its diagonals lies on a face. Every case has such a start (tested).
+        let n = lp.len();
+        let start = (0..n)
+            .find(|&s| (2..n - 1).all(|i| !on_one_face(lp[s], lp[(s + i) % n])))
+            .unwrap_or(0);
+        lp.rotate_left(start);
         case.loops.push(lp);
     }
     case
+}
+
+/// Whether cube edges `a` and `b` lie on a common face (the only way two edges are also edges
+/// of one other cell).
+fn on_one_face(a: u8, b: u8) -> bool {
+    let faces = |e: u8| {
+        let (axis, c) = EDGES[e as usize];
+        [1, 2].map(|k| {
+            let f = (axis + k) % 3;
+            (f, c >> f & 1)
+        })
+    };
+    let fb = faces(b);
+    faces(a).iter().any(|f| fb.contains(f))
 }
 
 /// The segment cutting off corner `f[i]` (between face edges i-1 and i), directed so the
@@ -182,6 +205,23 @@ mod tests {
             assert!(case.loops.iter().all(|l| l.len() >= 3), "case {mask}");
         }
         assert!(CASES[0].loops.is_empty() && CASES[255].loops.is_empty());
+    }
+
+    /// No fan diagonal joins two edges of one face, so no other cell can draw it too.
+    #[test]
+    fn fan_diagonals_never_lie_on_a_face() {
+        let mut longer = 0;
+        for (mask, case) in CASES.iter().enumerate() {
+            for lp in &case.loops {
+                for i in 2..lp.len() - 1 {
+                    assert!(!on_one_face(lp[0], lp[i]), "case {mask} loop {lp:?}");
+                }
+                longer += usize::from(lp.len() > 3);
+            }
+        }
+        // The check can fail: adjacent loop edges do share a face.
+        assert!(on_one_face(CASES[1].loops[0][0], CASES[1].loops[0][1]));
+        assert!(longer > 0, "no loop has a diagonal to check");
     }
 
     /// The loop around a lone inside corner, fanned, faces away from that corner.

@@ -256,6 +256,37 @@ fn vertex_colours_follow_materials() {
     );
 }
 
+/// The spheres proptest found (CI, stop 29): marching cubes fanned a loop that crosses an
+/// ambiguous face twice through a diagonal joining that face's two segments; the neighbour
+/// across the face drew triangles on it too, and the edge was in more than two triangles.
+#[test]
+fn two_spheres_touching_an_ambiguous_face_stay_manifold() {
+    let spheres = [
+        (
+            -0.07220454430229124,
+            -0.14304910718947808,
+            -0.2902556954041778,
+            0.4283117649658253,
+        ),
+        (
+            0.543088125427086,
+            -0.49881917524634906,
+            0.03301199618396629,
+            0.34501039901639785,
+        ),
+    ];
+    let mut root = Node::new(Call::new(Primitive::Sphere).with("radius", &[0.01]));
+    for (x, y, z, r) in spheres {
+        root = root.child(
+            Node::new(Call::new(Primitive::Sphere).with("radius", &[r]))
+                .op(Call::new(Transform::Translate).with("offset", &[x, y, z])),
+        );
+    }
+    let (m, _) = run(&Scene::new(root), &opts(Method::MarchingCubes, 20));
+    let e = check::edges(&m.tris);
+    assert!(e.is_closed_manifold(), "{e:?}");
+}
+
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(12))]
     /// Random unions of spheres (touching, nested, thin gaps): marching cubes is always a
