@@ -142,8 +142,9 @@ fn build_case(mask: usize) -> Case {
         lp.reverse();
         // Marching cubes fans each loop from its first edge. A fan diagonal between two edges
         // of one cube face could be drawn by the neighbour across that face too (a loop that
-        // crosses an ambiguous face twice), and more than two triangles would share it; start the fan
-        // where none of its diagonals lies on a face. Every case has such a start (tested).
+        // crosses an ambiguous face twice), and more than two triangles would share it; start
+        // the fan where none of its diagonals lies on a face. Every case has such a start
+        // (tested).
         let n = lp.len();
         let start = (0..n)
             .find(|&s| (2..n - 1).all(|i| !on_one_face(lp[s], lp[(s + i) % n])))
