@@ -189,4 +189,53 @@ mod tests {
                 .contains("truncated inside its header")
         );
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+
+        /// Any bytes: an error or a grid, never a panic, and nothing allocated past the limit.
+        #[test]
+        fn random_bytes_never_panic(
+            bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..120),
+        ) {
+            let _ = parse(&bytes, Path::new("fuzz.raw"), 1 << 16);
+        }
+
+        /// A valid file with bytes overwritten (header fields included) or cut short: an
+        /// error naming the file, or a grid of the size the header declares.
+        #[test]
+        fn mutated_files_parse_or_fail_naming_the_file(
+            kind in 0usize..2,
+            edits in proptest::collection::vec((0usize..80, proptest::prelude::any::<u8>()), 1..6),
+            cut in proptest::option::of(0usize..80),
+        ) {
+            let bbox = WorldBox::UNIT;
+            let g = if kind == 0 {
+                RawGrid::Density(Grid::from_data([2, 2, 2], vec![0.5; 8], bbox).unwrap())
+            } else {
+                RawGrid::Trail(Grid::from_data([2, 2, 2], vec![7; 8], bbox).unwrap())
+            };
+            let q = tmp(&format!("mut{kind}.raw"));
+            write(&q, &g).unwrap();
+            let mut b = std::fs::read(&q).unwrap();
+            for (at, v) in edits {
+                if at < b.len() {
+                    b[at] = v;
+                }
+            }
+            if let Some(n) = cut {
+                b.truncate(n);
+            }
+            match parse(&b, Path::new("fuzz.raw"), 1 << 16) {
+                Ok(g) => {
+                    let voxels = match g {
+                        RawGrid::Density(g) => g.data().len(),
+                        RawGrid::Trail(g) => g.data().len(),
+                    };
+                    proptest::prop_assert_eq!(voxels * 4 + HEADER_LEN, b.len());
+                }
+                Err(e) => proptest::prop_assert!(e.to_string().contains("fuzz.raw"), "{}", e),
+            }
+        }
+    }
 }

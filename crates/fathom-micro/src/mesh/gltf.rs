@@ -23,10 +23,100 @@ fn invalid(origin: &str, msg: impl Into<String>) -> MeshError {
     }
 }
 
+/// Refuses what the `gltf` crate (1.4.1) would panic on instead of reporting, before its
+/// validation runs:
+/// - a primitive's `POSITION`, `NORMAL`, `TEXCOORD_0` or indices naming an accessor that does
+///   not exist, or one of a type its reader does not handle (its validation indexes the
+///   accessors with the `POSITION` number unchecked; its readers hit `unreachable!` or a
+///   debug assertion on other types);
+/// - an accessor of count 0 (the spec's minimum is 1; its reader computes `count - 1`);
+/// - a buffer view whose stride is smaller than an element of an accessor reading it (a debug
+///   assertion in its reader).
+fn check_before_validation(json: &gltf::json::Root, origin: &str) -> Result<(), MeshError> {
+    use gltf::json::accessor::{ComponentType as C, Type as T};
+    use gltf::json::validation::Checked;
+    let n = json.accessors.len();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let expect = |what: &str, index: usize, types: &[T], comps: &[C]| {
+                let fail = |msg: String| {
+                    Err(invalid(
+                        origin,
+                        format!("mesh {m} primitive {p}: {what} {msg}"),
+                    ))
+                };
+                let Some(a) = json.accessors.get(index) else {
+                    return fail(format!("names accessor {index}, but the file has {n}"));
+                };
+                match (&a.type_, &a.component_type) {
+                    (Checked::Valid(t), Checked::Valid(c))
+                        if types.contains(t) && comps.contains(&c.0) =>
+                    {
+                        Ok(())
+                    }
+                    _ => fail(format!(
+                        "accessor {index} must be {types:?} of {comps:?}, not {:?} of {:?}",
+                        a.type_, a.component_type
+                    )),
+                }
+            };
+            let attr =
+                |s: gltf::Semantic| prim.attributes.get(&Checked::Valid(s)).map(|a| a.value());
+            if let Some(a) = attr(gltf::Semantic::Positions) {
+                expect("POSITION", a, &[T::Vec3], &[C::F32])?;
+            }
+            if let Some(a) = attr(gltf::Semantic::Normals) {
+                expect("NORMAL", a, &[T::Vec3], &[C::F32])?;
+            }
+            if let Some(a) = attr(gltf::Semantic::TexCoords(0)) {
+                expect("TEXCOORD_0", a, &[T::Vec2], &[C::U8, C::U16, C::F32])?;
+            }
+            if let Some(a) = prim.indices {
+                expect("indices", a.value(), &[T::Scalar], &[C::U8, C::U16, C::U32])?;
+            }
+        }
+    }
+    for (i, a) in json.accessors.iter().enumerate() {
+        if a.count.0 == 0 {
+            return Err(invalid(
+                origin,
+                format!("accessor {i} has count 0 (at least 1)"),
+            ));
+        }
+        let (Checked::Valid(ty), Checked::Valid(ct)) = (&a.type_, &a.component_type) else {
+            continue;
+        };
+        let size = ty.multiplicity() * ct.0.size();
+        let stride = a
+            .buffer_view
+            .and_then(|v| json.buffer_views.get(v.value()))
+            .and_then(|v| v.byte_stride);
+        if let Some(s) = stride
+            && s.0 < size
+        {
+            return Err(invalid(
+                origin,
+                format!(
+                    "accessor {i}: its buffer view's stride {} is smaller than an element \
+                     ({size} bytes)",
+                    s.0
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Parses glTF or GLB bytes; external buffers are looked up relative to `dir`.
 pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, MeshError> {
-    let doc = gltf::Gltf::from_slice(bytes)
-        .map_err(|e| invalid(origin, format!("not a valid glTF 2.0 file: {e}")))?;
+    let not_gltf = |e: gltf::Error| invalid(origin, format!("not a valid glTF 2.0 file: {e}"));
+    let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(not_gltf)?;
+    let json = raw.document.into_json();
+    check_before_validation(&json, origin)?;
+    let doc = gltf::Gltf {
+        document: gltf::Document::from_json(json).map_err(not_gltf)?,
+        blob: raw.blob,
+    };
     let mut buffers = Vec::new();
     for b in doc.buffers() {
         let data = match b.source() {
@@ -57,7 +147,8 @@ pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, 
                         })?
                 } else {
                     let p = dir.unwrap_or(Path::new(".")).join(uri);
-                    read_limited(&p)?
+                    read_limited(&p)
+                        .map_err(|e| invalid(origin, format!("buffer {}: {e}", b.index())))?
                 }
             }
         };

@@ -336,6 +336,121 @@ proptest! {
     }
 }
 
+/// `json` with the `k`-th number after `"field":` (or its array's first) replaced by `value`.
+fn set_number(json: &str, field: &str, k: usize, value: &str) -> String {
+    let key = format!("\"{field}\":");
+    let Some((at, _)) = json.match_indices(&key).nth(k) else {
+        return json.to_string();
+    };
+    let mut start = at + key.len();
+    if json[start..].starts_with('[') {
+        start += 1;
+    }
+    let len = json[start..]
+        .find(|c: char| !(c.is_ascii_digit() || c == '-' || c == '.'))
+        .unwrap_or(0);
+    format!("{}{value}{}", &json[..start], &json[start + len..])
+}
+
+/// Files the fuzz test below found to panic inside the `gltf` crate (1.4.1), now refused
+/// with what is wrong.
+#[test]
+fn gltf_files_the_gltf_crate_panicked_on_are_refused() {
+    let json = gltf_json(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        &[0, 2, 1],
+    )
+    .replacen("{\"buffer\":0,", "{\"buffer\":0,\"byteStride\":12,", 1);
+    assert!(gltf::parse(json.as_bytes(), None, "ok.gltf").is_ok());
+    for (field, value, says) in [
+        (
+            "POSITION",
+            "2",
+            "POSITION names accessor 2, but the file has 2",
+        ),
+        ("count", "0", "accessor 0 has count 0 (at least 1)"),
+        ("indices", "0", "indices accessor 0 must be [Scalar]"),
+        (
+            "byteStride",
+            "4",
+            "stride 4 is smaller than an element (12 bytes)",
+        ),
+    ] {
+        let e = gltf::parse(
+            set_number(&json, field, 0, value).as_bytes(),
+            None,
+            "bad.gltf",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("bad.gltf: ") && e.contains(says),
+            "{field}: {e}"
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// A valid glTF with its counts, offsets, lengths, types and references replaced by
+    /// random numbers, or its bytes overwritten: a clear error naming the file, or a mesh whose
+    /// indices are all in range. Never a panic, and never an allocation the header asks for
+    /// without the bytes to back it.
+    #[test]
+    fn gltf_loader_survives_edited_numbers(
+        edits in proptest::collection::vec((
+            prop_oneof![
+                Just("byteLength"), Just("byteOffset"), Just("count"), Just("componentType"),
+                Just("buffer"), Just("bufferView"), Just("POSITION"), Just("indices"),
+                Just("mesh"), Just("nodes"), Just("scene"), Just("byteStride"),
+            ],
+            0usize..2,
+            prop_oneof![
+                Just("0".to_string()), Just("1".to_string()), Just("3".to_string()),
+                Just("-1".to_string()), Just("5121".to_string()), Just("5125".to_string()),
+                Just("4294967295".to_string()), Just("18446744073709551616".to_string()),
+                Just("1e300".to_string()), (0u64..100).prop_map(|v| v.to_string()),
+            ],
+        ), 1..4),
+        bytes in proptest::collection::vec((0usize..1200, any::<u8>()), 0..3),
+    ) {
+        let mut json = gltf_json(
+            &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]],
+            &[0, 2, 1, 1, 2, 3],
+        )
+        .replacen("{\"buffer\":0,", "{\"buffer\":0,\"byteStride\":12,", 1);
+        for (field, k, value) in &edits {
+            json = set_number(&json, field, *k, value);
+        }
+        let mut b = json.into_bytes();
+        for (at, v) in bytes {
+            if at < b.len() {
+                b[at] = v;
+            }
+        }
+        match gltf::parse(&b, None, "fuzz.gltf") {
+            Ok(raw) => {
+                let n = raw.positions.len();
+                prop_assert!(raw.triangles.iter().flatten().all(|&i| (i as usize) < n));
+                let _ = Mesh::build(raw, Some(UvProjection::Box), "fuzz.gltf");
+            }
+            Err(e) => prop_assert!(e.to_string().contains("fuzz.gltf"), "{}", e),
+        }
+    }
+
+    /// Any bytes, with or without the GLB magic in front: an error or a mesh, never a panic.
+    #[test]
+    fn gltf_loader_survives_random_bytes(
+        glb in any::<bool>(),
+        bytes in proptest::collection::vec(any::<u8>(), 0..200),
+    ) {
+        let mut b = if glb { b"glTF\x02\0\0\0".to_vec() } else { Vec::new() };
+        b.extend(bytes);
+        let _ = gltf::parse(&b, None, "fuzz.glb");
+    }
+}
+
 /// Inputs that once needed care, replayed every run.
 #[test]
 fn obj_corpus_replays() {
