@@ -69,6 +69,9 @@ pub struct OctreeSettings {
     pub settle_frames: usize,
     /// Subdivision time per frame in ms, for stepped frames (zooms and the window).
     pub subdivide_ms: f64,
+    /// Frame rate the stepped frames hold by giving subdivision no more than the render left,
+    /// between half and all of `subdivide_ms` (0: a fixed `subdivide_ms`), [0, 1000].
+    pub target_fps: f64,
     /// Unify (unload bricks no ray visited) every this many stepped frames.
     pub unify_every: u32,
     /// Side in pixels of the tiles whose corner rays find where all the tile's rays start
@@ -91,6 +94,7 @@ impl Default for OctreeSettings {
             fit_half: 4.0,
             settle_frames: 400,
             subdivide_ms: fathom_svo::explorer::DEFAULT_SUBDIVIDE_MS,
+            target_fps: 0.0,
             unify_every: 4,
             beam: fathom_svo::explorer::DEFAULT_BEAM,
             beam_min: fathom_svo::explorer::DEFAULT_BEAM_MIN,
@@ -324,6 +328,7 @@ impl RenderRequest {
             max_memory: o.max_memory,
             traversal: o.traversal,
             subdivide_ms: o.subdivide_ms,
+            target_fps: o.target_fps,
             unify_every: o.unify_every,
             beam: o.beam,
             beam_min: o.beam_min,

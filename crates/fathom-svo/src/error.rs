@@ -21,6 +21,8 @@ pub enum OctreeError {
     Margin(f64),
     #[error("subdivision budget must be a non-negative number of ms")]
     SubdivideMs(f64),
+    #[error("target frame rate {0} is out of range 0..=1000 fps (0: a fixed subdivision time)")]
+    TargetFps(f64),
     #[error("the root cube must be finite with a positive side")]
     Root,
     #[error("beam (tile side) {0} is out of range 0..=256 pixels (0: no beams)")]

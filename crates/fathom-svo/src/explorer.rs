@@ -68,6 +68,10 @@ pub struct ExplorerConfig {
     pub traversal: Traversal,
     /// Time per frame for subdivision, in milliseconds (at least `min_subdivisions` are done).
     pub subdivide_ms: f64,
+    /// Frame rate to hold, or 0 for none: above 0, each frame's subdivision takes what its
+    /// render left of the frame time `1000 / target_fps` ms, between half and twice
+    /// `subdivide_ms` ([`ExplorerConfig::subdivide_budget`]), [0, 1000].
+    pub target_fps: f64,
     /// Subdivisions done each frame whatever the time, counted in f64 evaluations' worth: on
     /// deep frames (double-double evaluation) a subdivision counts [`DEEP_COST`] times.
     pub min_subdivisions: usize,
@@ -106,6 +110,7 @@ impl Default for ExplorerConfig {
             margin: crate::generate::DEFAULT_MARGIN,
             traversal: Traversal::Neighbour,
             subdivide_ms: DEFAULT_SUBDIVIDE_MS,
+            target_fps: 0.0,
             min_subdivisions: 256,
             root: RootSpec::default(),
             beam: DEFAULT_BEAM,
@@ -143,6 +148,9 @@ impl ExplorerConfig {
         if !(self.subdivide_ms.is_finite() && self.subdivide_ms >= 0.0) {
             return Err(OctreeError::SubdivideMs(self.subdivide_ms));
         }
+        if !(self.target_fps.is_finite() && (0.0..=1000.0).contains(&self.target_fps)) {
+            return Err(OctreeError::TargetFps(self.target_fps));
+        }
         if self.beam > 256 {
             return Err(OctreeError::Beam(self.beam));
         }
@@ -150,6 +158,19 @@ impl ExplorerConfig {
             return Err(OctreeError::BeamMin(self.beam_min));
         }
         self.root.validate()
+    }
+
+    /// The subdivision time of a frame whose render took `render_ms`: `subdivide_ms`, or with
+    /// a [`ExplorerConfig::target_fps`] what the render left of the frame time, clamped to
+    /// `[subdivide_ms / 2, subdivide_ms]`: a slow render still refines, and a fast one does
+    /// not spend the spare time refining (giving it up to twice `subdivide_ms` made the
+    /// Menger zoom's next frames slower to render, its 10th-percentile frame rate 30 to 22).
+    pub fn subdivide_budget(&self, render_ms: f64) -> f64 {
+        if self.target_fps > 0.0 {
+            (1e3 / self.target_fps - render_ms).clamp(0.5 * self.subdivide_ms, self.subdivide_ms)
+        } else {
+            self.subdivide_ms
+        }
     }
 }
 
@@ -742,7 +763,7 @@ impl Explorer {
         let render_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = Instant::now();
         let nreq = reqs.len() as u64;
-        let sub = self.subdivide(reqs, self.cfg.subdivide_ms);
+        let sub = self.subdivide(reqs, self.cfg.subdivide_budget(render_ms));
         let subdivide_ms = t1.elapsed().as_secs_f64() * 1e3;
         let t2 = Instant::now();
         let pressure = self.tree.counts().nodes as f64 > 0.9 * self.tree.max_nodes as f64;
@@ -1006,5 +1027,31 @@ mod order_tests {
         ];
         order_requests(&mut r);
         assert_eq!(r.iter().map(|q| q.id).collect::<Vec<_>>(), [2, 3, 1]);
+    }
+}
+
+#[cfg(test)]
+mod budget_tests {
+    use super::*;
+
+    /// With a target frame rate, subdivision gets what the render left of the frame, within
+    /// half and all of `subdivide_ms`; without one, always `subdivide_ms`.
+    #[test]
+    fn a_target_frame_rate_gives_subdivision_what_the_render_left() {
+        let mut c = ExplorerConfig {
+            subdivide_ms: 8.0,
+            ..ExplorerConfig::default()
+        };
+        assert_eq!(c.subdivide_budget(30.0), 8.0);
+        c.target_fps = 30.0;
+        assert_eq!(c.subdivide_budget(10.0), 8.0);
+        assert!((c.subdivide_budget(28.0) - (1e3 / 30.0 - 28.0)).abs() < 1e-12);
+        assert_eq!(c.subdivide_budget(60.0), 4.0);
+        assert!(c.validate().is_ok());
+        for bad in [-1.0, f64::NAN, f64::INFINITY, 1001.0] {
+            c.target_fps = bad;
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.contains("0..=1000 fps"), "{bad}: {e}");
+        }
     }
 }

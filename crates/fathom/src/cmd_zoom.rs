@@ -104,6 +104,11 @@ pub struct ZoomArgs {
     /// rate.
     #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_SUBDIVIDE_MS)]
     pub subdivide_ms: f64,
+    /// Hold this frame rate: a frame whose render leaves less than --subdivide-ms of the frame
+    /// time subdivides for what is left, down to half of it (0: always --subdivide-ms),
+    /// [0, 1000].
+    #[arg(long, default_value_t = 0.0)]
+    pub target_fps: f64,
     /// Unify (unload bricks no ray visited) every this many frames, >= 1.
     #[arg(long, default_value_t = 4)]
     pub unify_every: u32,
@@ -225,6 +230,7 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
                 max_memory: parse_bytes(&a.max_memory)?,
                 traversal: a.traversal.into(),
                 subdivide_ms: a.subdivide_ms,
+                target_fps: a.target_fps,
                 unify_every: a.unify_every,
                 beam: a.beam,
                 beam_min: a.beam_min,
