@@ -54,10 +54,20 @@ fn check_before_validation(json: &gltf::json::Root, origin: &str) -> Result<(), 
                     {
                         Ok(())
                     }
-                    _ => fail(format!(
-                        "accessor {index} must be {types:?} of {comps:?}, not {:?} of {:?}",
-                        a.type_, a.component_type
-                    )),
+                    (t, c) => {
+                        let list = |v: Vec<&str>| v.join(", ");
+                        let found = match (t, c) {
+                            (Checked::Valid(t), Checked::Valid(c)) => {
+                                format!("{} of {}", type_name(*t), component_name(c.0))
+                            }
+                            _ => "of an invalid type".into(),
+                        };
+                        fail(format!(
+                            "accessor {index} is {found}; expected {} of {}",
+                            list(types.iter().map(|t| type_name(*t)).collect()),
+                            list(comps.iter().map(|c| component_name(*c)).collect()),
+                        ))
+                    }
                 }
             };
             let attr =
@@ -105,6 +115,33 @@ fn check_before_validation(json: &gltf::json::Root, origin: &str) -> Result<(), 
         }
     }
     Ok(())
+}
+
+/// An accessor type's name in glTF files.
+fn type_name(t: gltf::json::accessor::Type) -> &'static str {
+    use gltf::json::accessor::Type as T;
+    match t {
+        T::Scalar => "SCALAR",
+        T::Vec2 => "VEC2",
+        T::Vec3 => "VEC3",
+        T::Vec4 => "VEC4",
+        T::Mat2 => "MAT2",
+        T::Mat3 => "MAT3",
+        T::Mat4 => "MAT4",
+    }
+}
+
+/// A component type's name in the glTF specification.
+fn component_name(c: gltf::json::accessor::ComponentType) -> &'static str {
+    use gltf::json::accessor::ComponentType as C;
+    match c {
+        C::I8 => "BYTE",
+        C::U8 => "UNSIGNED_BYTE",
+        C::I16 => "SHORT",
+        C::U16 => "UNSIGNED_SHORT",
+        C::U32 => "UNSIGNED_INT",
+        C::F32 => "FLOAT",
+    }
 }
 
 /// Parses glTF or GLB bytes; external buffers are looked up relative to `dir`.

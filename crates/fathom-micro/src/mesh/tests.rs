@@ -369,7 +369,12 @@ fn gltf_files_the_gltf_crate_panicked_on_are_refused() {
             "POSITION names accessor 2, but the file has 2",
         ),
         ("count", "0", "accessor 0 has count 0 (at least 1)"),
-        ("indices", "0", "indices accessor 0 must be [Scalar]"),
+        (
+            "indices",
+            "0",
+            "indices accessor 0 is VEC3 of FLOAT; expected SCALAR of UNSIGNED_BYTE, \
+             UNSIGNED_SHORT, UNSIGNED_INT",
+        ),
         (
             "byteStride",
             "4",
