@@ -68,8 +68,8 @@ pub struct ExplorerConfig {
     pub traversal: Traversal,
     /// Time per frame for subdivision, in milliseconds (at least `min_subdivisions` are done).
     pub subdivide_ms: f64,
-    /// Frame rate to hold, or 0 for none: above 0, each frame's subdivision takes what its
-    /// render left of the frame time `1000 / target_fps` ms, between half and twice
+    /// Frame rate to hold, or 0 for none: above 0, a frame's subdivision takes no more than
+    /// what its render left of the frame time `1000 / target_fps` ms, between half and all of
     /// `subdivide_ms` ([`ExplorerConfig::subdivide_budget`]), [0, 1000].
     pub target_fps: f64,
     /// Subdivisions done each frame whatever the time, counted in f64 evaluations' worth: on
