@@ -7,7 +7,8 @@
 //! that goes stale (the view moved again) is cancelled at once; an interactive frame is let
 //! finish (it is short) unless it has run past twice the target. Octree frames step the tree
 //! instead, at full resolution (the octree holds its frame time by its subdivision budget),
-//! until it asks for no more subdivision.
+//! until it asks for no more subdivision; their subdivision takes what the render leaves of
+//! the target frame time.
 //!
 //! A GPU frame cannot be cancelled once submitted, so on the GPU the first refinement waits
 //! until the view has held still for [`GPU_REFINE_DELAY_MS`]: a slider dragged slowly (or a
@@ -243,13 +244,18 @@ impl Viewport {
             fathom_core::Projection::SideBySide { .. } => ((fw / 2).max(1), fh),
             fathom_core::Projection::Ods { .. } => (fw, (fh / 2).max(1)),
         };
-        let request = RenderRequest {
+        let mut request = RenderRequest {
             width: fw,
             height: fh,
             supersample: ss,
             region: None,
             ..base.clone()
         };
+        if octree {
+            // The octree's frames hold the same frame time: its subdivision takes what the
+            // render leaves of it (between half and all of its budget).
+            request.octree.target_fps = 1e3 / self.scale.target_ms();
+        }
         self.next_id += 1;
         let cancel = CancelToken::new();
         worker.render(FrameJob {
@@ -287,5 +293,72 @@ impl Viewport {
     /// Whether a frame is being rendered.
     pub fn busy(&self) -> bool {
         self.in_flight.is_some()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::worker::Reply;
+    use std::time::Duration;
+
+    /// Schedules the next frame of `key` and waits for it (at most 60 s); the viewport takes
+    /// it as the window would. Returns the frame's request, the session's counters and the
+    /// octree's outstanding subdivisions.
+    fn next_frame(
+        v: &mut Viewport,
+        w: &mut Worker,
+        (key, cam, base): (u64, &Camera, &RenderRequest),
+    ) -> (RenderRequest, fathom_render::Counters, Option<u64>) {
+        v.schedule(w, key, cam, base, (32, 24));
+        let start = Instant::now();
+        loop {
+            for r in w.poll() {
+                if let Reply::Frame(done) = r {
+                    assert!(done.result.is_ok(), "{:?}", done.result.err());
+                    let out = (done.request.clone(), done.counters, done.octree_requests);
+                    v.accept(*done);
+                    return out;
+                }
+            }
+            assert!(start.elapsed() < Duration::from_secs(60), "no frame");
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    #[test]
+    fn octree_frames_hold_the_target_frame_time_and_a_new_target_keeps_the_tree() {
+        let scene = fathom_core::presets::load("sierpinski").unwrap();
+        let cam = scene.camera.clone();
+        let mut w = Worker::start(scene, 0, || {}).unwrap();
+        let base = RenderRequest {
+            backend: Backend::Octree,
+            threads: Some(1),
+            ..RenderRequest::default()
+        };
+        let key = view_key(&cam, 0, &base);
+        let mut v = Viewport::new(40.0);
+        let (req, _, requests) = next_frame(&mut v, &mut w, (key, &cam, &base));
+        assert_eq!(req.octree.target_fps, 25.0);
+        assert!(requests.is_some(), "a stepped octree frame");
+        // The slider moves: the next step of the same view asks for 50 fps, on the same tree.
+        v.scale.set_target_ms(20.0);
+        let (req, counters, _) = next_frame(&mut v, &mut w, (key, &cam, &base));
+        assert_eq!(req.octree.target_fps, 50.0);
+        assert_eq!(
+            counters.octrees_built, 1,
+            "a new frame-time target kept the tree"
+        );
+        // A setting that shapes the tree does rebuild it.
+        let finer = RenderRequest {
+            octree: fathom_render::OctreeSettings {
+                fidelity: 2.0,
+                ..base.octree.clone()
+            },
+            ..base.clone()
+        };
+        let finer_key = view_key(&cam, 0, &finer);
+        let (_, counters, _) = next_frame(&mut v, &mut w, (finer_key, &cam, &finer));
+        assert_eq!(counters.octrees_built, 2);
     }
 }

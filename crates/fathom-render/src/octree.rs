@@ -1,9 +1,11 @@
 //! The octree backend of a session: one explorer, kept while the scene and the octree settings
 //! stay the same (so a still view settles once and a zoom or a window steps the same tree),
-//! rebuilt when either changes. A still frame settles the tree at the view (subdividing until
-//! no leaf asks for more, within the request's frame limit) and renders it; a stepped frame
-//! renders the tree as it is and subdivides within a time budget. Frames go through the shared
-//! post effects; regions are cropped from the whole frame.
+//! rebuilt when either changes; the per-frame time budgets (`subdivide_ms`, `target_fps`) are
+//! not part of the tree and change in place, so a window's frame-time slider keeps the tree.
+//! A still frame settles the tree at the view (subdividing until no leaf asks for more, within
+//! the request's frame limit) and renders it; a stepped frame renders the tree as it is and
+//! subdivides within a time budget. Frames go through the shared post effects; regions are
+//! cropped from the whole frame.
 
 use crate::control::Control;
 use crate::request::RenderRequest;
@@ -20,9 +22,21 @@ pub(crate) struct OctreeBackend {
     key: (u64, ExplorerConfig),
 }
 
+/// The settings that shape the tree: `cfg` with its per-frame time budgets set to their
+/// defaults (a budget decides how much a frame refines, not what the tree is).
+fn tree_settings(cfg: &ExplorerConfig) -> ExplorerConfig {
+    let d = ExplorerConfig::default();
+    ExplorerConfig {
+        subdivide_ms: d.subdivide_ms,
+        target_fps: d.target_fps,
+        ..cfg.clone()
+    }
+}
+
 impl OctreeBackend {
     /// The explorer for `scene` (of shading generation `generation`) and `req`'s settings,
-    /// building a new one when either changed.
+    /// building a new one when either changed (other than the time budgets, which are set on
+    /// the explorer kept).
     pub fn get<'a>(
         slot: &'a mut Option<OctreeBackend>,
         scene: &Scene,
@@ -31,14 +45,17 @@ impl OctreeBackend {
         counters: &mut Counters,
     ) -> Result<&'a mut OctreeBackend, OctreeError> {
         let cfg = req.octree_config();
-        let key = (generation, cfg.clone());
+        let key = (generation, tree_settings(&cfg));
         if slot.as_ref().is_none_or(|o| o.key != key) {
             *slot = None;
-            let explorer = Explorer::new(scene, cfg)?;
+            let explorer = Explorer::new(scene, cfg.clone())?;
             counters.octrees_built += 1;
             *slot = Some(OctreeBackend { explorer, key });
         }
-        Ok(slot.as_mut().expect("built above"))
+        let ob = slot.as_mut().expect("built above");
+        ob.explorer.cfg.subdivide_ms = cfg.subdivide_ms;
+        ob.explorer.cfg.target_fps = cfg.target_fps;
+        Ok(ob)
     }
 
     /// Settles the tree at `camera` and renders it.

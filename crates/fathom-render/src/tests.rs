@@ -106,6 +106,27 @@ fn octree_regions_are_crops_too() {
 }
 
 #[test]
+fn a_new_time_budget_steps_the_same_octree_and_a_new_fidelity_rebuilds_it() {
+    let scene = presets::load("menger").unwrap();
+    let cam = scene.camera.clone();
+    let mut s = Session::new(scene).unwrap();
+    let mut req = RenderRequest {
+        backend: Backend::Octree,
+        ..request(40, 30)
+    };
+    s.step_octree(&cam, &req, false).unwrap();
+    req.octree.subdivide_ms = 3.0;
+    req.octree.target_fps = 45.0;
+    s.step_octree(&cam, &req, false).unwrap();
+    assert_eq!(s.counters().octrees_built, 1);
+    let cfg = &s.octree().unwrap().cfg;
+    assert_eq!((cfg.subdivide_ms, cfg.target_fps), (3.0, 45.0));
+    req.octree.fidelity = 2.0;
+    s.step_octree(&cam, &req, false).unwrap();
+    assert_eq!(s.counters().octrees_built, 2);
+}
+
+#[test]
 fn parameter_edits_compile_nothing_and_structure_edits_recompile_the_tape() {
     let scene = fathom_core::scenes::hundred_node_scene();
     let mut s = Session::new(scene.clone()).unwrap();
