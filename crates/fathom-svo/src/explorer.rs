@@ -318,6 +318,9 @@ pub struct Explorer {
     skip: Option<(u32, BoxU)>,
     frame: u64,
     beam_steps: u64,
+    /// The last render's LOD factor ([`Ray::lod`]): a requested leaf's children narrower
+    /// than its ray's footprint (`t * lod`) are final for now.
+    lod: f64,
 }
 
 impl Explorer {
@@ -354,6 +357,7 @@ impl Explorer {
             skip: None,
             frame: 0,
             beam_steps: 0,
+            lod: 0.0,
         })
     }
 
@@ -426,7 +430,7 @@ impl Explorer {
             if n.is_empty() || !n.is_leaf() || b.depth >= self.tree.depth_limit() {
                 return;
             }
-            let r = eval_children(&self.shader, &self.tree, &mut ev, id, b);
+            let r = eval_children(&self.shader, &self.tree, &mut ev, (id, b), 0.0);
             if apply(&mut self.tree, &r) == Outcome::NoMemory {
                 return;
             }
@@ -519,6 +523,7 @@ impl Explorer {
         self.clear_eye(o);
         let (w, h) = (self.cfg.width, self.cfg.height);
         let lod = frame.pixel_angle(h) * self.cfg.fidelity;
+        self.lod = lod;
         let mut colour = vec![0u32; (w * h) as usize];
         let mut depth = vec![0f32; (w * h) as usize];
         let tree = &self.tree;
@@ -695,10 +700,13 @@ impl Explorer {
             let chunk = &reqs[next..end];
             let tree = &self.tree;
             let sh = &self.shader;
+            let lod = self.lod;
             let results: Vec<Children> = self.pool.install(|| {
                 chunk
                     .par_iter()
-                    .map_init(Probe::new, |ev, r| eval_children(sh, tree, ev, r.id, r.b))
+                    .map_init(Probe::new, |ev, r| {
+                        eval_children(sh, tree, ev, (r.id, r.b), r.t * lod)
+                    })
                     .collect()
             });
             for r in &results {

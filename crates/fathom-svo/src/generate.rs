@@ -17,6 +17,13 @@
 //! running derivative underestimates the map's stretch (`fathom_core` fractals tests). Where
 //! the boundary is locally a plane, a voxel it crosses has a corner on each side, so the
 //! corner test catches it. The corners of the 8 children are the parent's 3x3x3 lattice.
+//!
+//! A conservative test keeps a shell of full voxels the surface does not cross in front of an
+//! underestimated surface. A new child whose surface point lies outside its cube (its plane is
+//! clear of it) and that is still wider than the footprint of the ray that asked for the split
+//! is therefore tested one level down at once, and dropped when none of its own children is
+//! full ([`eval_children`]): the decision its split would have made a frame or more later,
+//! after being drawn as a cube in front of the surface and walked through by rays.
 
 use crate::evict::{free_children, mark_visited};
 use crate::node::{EMPTY, NONE, REQUESTED, VISITED, pack_rgb};
@@ -288,6 +295,14 @@ impl Shader {
     /// Also returns the voxel's [`SurfacePlane`]: through the surface point, with the normal
     /// the colour was shaded with (none with flat colours or where no surface point was found).
     pub fn colour(&self, ev: &mut Probe, c: DVec3, h: f64, d: f64) -> (u32, SurfacePlane) {
+        let s = self.surface(ev, c, h, d);
+        (self.shade(ev, &s), s.plane)
+    }
+
+    /// The first half of [`Shader::colour`]: the voxel's surface point, the value and the
+    /// distance gradient there, and its plane (enough to tell a voxel whose plane is clear of
+    /// it before shading it).
+    pub fn surface(&self, ev: &mut Probe, c: DVec3, h: f64, d: f64) -> Surface {
         let h = h.max(1e-300);
         let found = if self.gradient_shading && d.is_finite() {
             self.surface_point(ev, c, h)
@@ -295,6 +310,26 @@ impl Shader {
             None
         };
         let (p, v) = found.unwrap_or_else(|| (c, self.eval(ev, c)));
+        if !self.gradient_shading {
+            return Surface {
+                p,
+                v,
+                g: DVec3::ZERO,
+                plane: SurfacePlane::NONE,
+            };
+        }
+        let g = self.gradient(ev, p, h);
+        let plane = if found.is_some() {
+            SurfacePlane::new(g, p, c, h)
+        } else {
+            SurfacePlane::NONE
+        };
+        Surface { p, v, g, plane }
+    }
+
+    /// The second half of [`Shader::colour`]: the colour shaded at a voxel's [`Surface`].
+    pub fn shade(&self, ev: &mut Probe, s: &Surface) -> u32 {
+        let (p, v) = (s.p, s.v);
         let mats = self.tape.materials();
         let pick = |id: f64| (id.max(0.0) as usize).min(mats.len().saturating_sub(1));
         let (albedo, spec, shin, mix) = match (mats.get(pick(v.id)), mats.get(pick(v.id2))) {
@@ -318,15 +353,9 @@ impl Shader {
             albedo[i] + (pc - albedo[i]) * mix
         });
         if !self.gradient_shading {
-            return (pack_rgb(base), SurfacePlane::NONE);
+            return pack_rgb(base);
         }
-        let g = self.gradient(ev, p, h);
-        let plane = if found.is_some() {
-            SurfacePlane::new(g, p, c, h)
-        } else {
-            SurfacePlane::NONE
-        };
-        let n = g.normalize_or(DVec3::Y);
+        let n = s.g.normalize_or(DVec3::Y);
         // Distance-field ambient occlusion, as the tracer computes it.
         let range = 0.05 * self.view.scale;
         let (mut occ, mut w, mut wsum) = (0.0, 1.0, 0.0);
@@ -357,8 +386,21 @@ impl Shader {
                 col[i] += (base[i] + sp) * lc[i] * ndl;
             }
         }
-        (pack_rgb(col), plane)
+        pack_rgb(col)
     }
+}
+
+/// Where a full voxel's surface is, as [`Shader::surface`] found it.
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    /// The surface point (world units relative to the origin), or the voxel's centre.
+    pub p: DVec3,
+    /// The tape's value there.
+    pub v: fathom_core::Value<f64>,
+    /// The distance gradient there (not normalised; zero with flat colours).
+    pub g: DVec3,
+    /// The voxel's plane.
+    pub plane: SurfacePlane,
 }
 
 impl Shader {
@@ -448,13 +490,23 @@ pub struct Children {
     pub planes: [SurfacePlane; 8],
 }
 
-/// Evaluates the 8 children of the leaf with box `b` (read-only; runs in parallel).
+/// Evaluates the 8 children of the leaf `id` with box `b` (read-only; runs in parallel).
 ///
-/// The children's centre distances are two four-lane evaluations, and on estimate scenes the
-/// parent's 3x3x3 corner lattice is seven, all 27 points at once once any child fails the
-/// centre test: seven packets cost what 9-11 scalar evaluations do, where the lattice filled
-/// lazily child by child took 19 on average (Mandelbulb zoom).
-pub fn eval_children(sh: &Shader, tree: &Octree, ev: &mut Probe, id: u32, b: BoxU) -> Children {
+/// A full child wider than `final_side` (root units: the footprint of the ray that asked for
+/// the split, below which the child is drawn as it is) whose surface plane lies clear of its
+/// cube (its surface point is outside it, [`SurfacePlane::is_clear`]) has its own children
+/// tested at once, and is empty when none of them is full: the test its subdivision would
+/// make, made before it is drawn. Such a child is the conservative full test's shell in front
+/// of an underestimated surface (two thirds of the Mandelbulb zoom's full leaves, three
+/// quarters of which emptied when split later). Children at or below `final_side` keep the
+/// plain test, so settled trees are unchanged.
+pub fn eval_children(
+    sh: &Shader,
+    tree: &Octree,
+    ev: &mut Probe,
+    (id, b): (u32, BoxU),
+    final_side: f64,
+) -> Children {
     let mut out = Children {
         id,
         b,
@@ -463,15 +515,112 @@ pub fn eval_children(sh: &Shader, tree: &Octree, ev: &mut Probe, id: u32, b: Box
         planes: [SurfacePlane::NONE; 8],
     };
     let side = b.dim() * 0.5 * tree.root_size;
+    let t = full_children(sh, tree, ev, &b);
+    out.full = t.full;
+    let look_deeper = b.depth + 1 < tree.depth_limit() && b.dim() * 0.5 > final_side;
+    for (o, (&c, &d)) in t.centres.iter().zip(&t.d).enumerate() {
+        if out.full >> o & 1 == 1 {
+            let s = sh.surface(ev, c, side * 0.5, d);
+            if look_deeper && s.plane.is_clear() && !any_child_full(sh, tree, ev, &b, o, &t) {
+                out.full &= !(1 << o);
+                continue;
+            }
+            (out.colours[o], out.planes[o]) = (sh.shade(ev, &s), s.plane);
+        }
+    }
+    out
+}
+
+/// The full test of the children of `b`'s child `o` (`t` is `b`'s [`full_children`]): true
+/// when one of them is full, as `full_children(&b.child(o)).full != 0` would say, without
+/// evaluating again the points of the child's 3x3x3 lattice `t` already has: its centre and,
+/// when `b`'s lattice was evaluated, its corners (26 new points instead of 35).
+fn any_child_full(
+    sh: &Shader,
+    tree: &Octree,
+    ev: &mut Probe,
+    b: &BoxU,
+    o: usize,
+    t: &ChildTests,
+) -> bool {
+    let cb = b.child(o);
+    let hd = cb.dim() * 0.5 * tree.root_size * 0.5 * 3f64.sqrt();
+    let centres: [DVec3; 8] = std::array::from_fn(|g| tree.centre_local(&cb.child(g)));
+    let d = sh.distances(ev, &centres);
+    if centres
+        .iter()
+        .zip(&d)
+        .any(|(&c, &d)| sh.full_distance(d, c, hd))
+    {
+        return true;
+    }
+    if !sh.corner_test {
+        return false;
+    }
+    let inside = |d: f64| d <= 0.0 || d.is_nan();
+    // The child's lattice point `ijk` (0..=2 per axis): a corner when every coordinate is 0 or
+    // 2, the centre at (1, 1, 1).
+    let corner_of_b = |ijk: [usize; 3]| {
+        let q = [0, 1, 2].map(|a| (o >> a & 1) + ijk[a] / 2);
+        q[0] + 3 * q[1] + 9 * q[2]
+    };
+    let lattice = |i: usize| [i % 3, i / 3 % 3, i / 9];
+    if inside(t.d[o]) {
+        return true;
+    }
+    let known =
+        |ijk: [usize; 3]| ijk == [1, 1, 1] || (t.lattice.is_some() && ijk.iter().all(|&x| x != 1));
+    if let Some(l) = &t.lattice
+        && (0..27).any(|i| lattice(i).iter().all(|&x| x != 1) && l[corner_of_b(lattice(i))])
+    {
+        return true;
+    }
+    let h = cb.dim() * 0.5;
+    let mut pts = [DVec3::ZERO; 26];
+    let mut n = 0;
+    for ijk in (0..27).map(lattice).filter(|&ijk| !known(ijk)) {
+        pts[n] = tree.local_world([0, 1, 2].map(|a| cb.min[a] + h * ijk[a] as f64));
+        n += 1;
+    }
+    if n == 18 {
+        let p18: [DVec3; 18] = std::array::from_fn(|k| pts[k]);
+        sh.distances(ev, &p18).into_iter().any(inside)
+    } else {
+        sh.distances(ev, &pts).into_iter().any(inside)
+    }
+}
+
+/// The full test of the 8 children of a box ([`full_children`]).
+struct ChildTests {
+    /// Mask of the full children.
+    full: u8,
+    /// Their centres (world units relative to the origin) and the distances there.
+    centres: [DVec3; 8],
+    d: [f64; 8],
+    /// Inside flags of the box's 3x3x3 lattice of children's corners, when it was evaluated.
+    lattice: Option<[bool; 27]>,
+}
+
+/// The full test of the 8 children of box `b`: the mask of full children, their centres
+/// (world units relative to the origin) and the distances there.
+///
+/// The children's centre distances are two four-lane evaluations, and on estimate scenes the
+/// parent's 3x3x3 corner lattice is seven, all 27 points at once once any child fails the
+/// centre test: seven packets cost what 9-11 scalar evaluations do, where the lattice filled
+/// lazily child by child took 19 on average (Mandelbulb zoom).
+fn full_children(sh: &Shader, tree: &Octree, ev: &mut Probe, b: &BoxU) -> ChildTests {
+    let side = b.dim() * 0.5 * tree.root_size;
     let hd = side * 0.5 * 3f64.sqrt();
     let centres: [DVec3; 8] = std::array::from_fn(|o| tree.centre_local(&b.child(o)));
     let d = sh.distances(ev, &centres);
+    let mut full = 0u8;
     for (o, (&c, &d)) in centres.iter().zip(&d).enumerate() {
         if sh.full_distance(d, c, hd) {
-            out.full |= 1 << o;
+            full |= 1 << o;
         }
     }
-    if out.full != 0xff && sh.corner_test {
+    let mut lattice = None;
+    if full != 0xff && sh.corner_test {
         // Inside flags of the parent's 3x3x3 lattice (the children's corners).
         let h = b.dim() * 0.5;
         let point = |i: usize| {
@@ -480,23 +629,24 @@ pub fn eval_children(sh: &Shader, tree: &Octree, ev: &mut Probe, id: u32, b: Box
         };
         let pts: [DVec3; 27] = std::array::from_fn(point);
         let inside = sh.distances(ev, &pts).map(|d| d <= 0.0 || d.is_nan());
-        let by_centre = out.full;
+        let by_centre = full;
         for o in (0..8).filter(|o| by_centre >> o & 1 == 0) {
             let corner = |k: usize| {
                 let ijk = [0, 1, 2].map(|a| (o >> a & 1) + (k >> a & 1));
                 ijk[0] + 3 * ijk[1] + 9 * ijk[2]
             };
             if (0..8).any(|k| inside[corner(k)]) {
-                out.full |= 1 << o;
+                full |= 1 << o;
             }
         }
+        lattice = Some(inside);
     }
-    for (o, (&c, &d)) in centres.iter().zip(&d).enumerate() {
-        if out.full >> o & 1 == 1 {
-            (out.colours[o], out.planes[o]) = sh.colour(ev, c, side * 0.5, d);
-        }
+    ChildTests {
+        full,
+        centres,
+        d,
+        lattice,
     }
-    out
 }
 
 /// What linking one evaluated node did.
@@ -656,7 +806,7 @@ mod tests {
 
     #[test]
     fn packet_children_tests_match_point_by_point_ones() {
-        // eval_children decides the 8 children from two packets of centres and, on estimate
+        // full_children decides the 8 children from two packets of centres and, on estimate
         // scenes, seven packets of the 3x3x3 corner lattice; point by point (f64), the same
         // points must give the same full children on boxes down to the zoom target. The
         // Mandelbulb's estimate is first-order at its surface and its centres alone find the
@@ -673,7 +823,7 @@ mod tests {
             let (mut full, mut by_corner) = (0, 0);
             let mut b = BoxU::ROOT;
             for _ in 0..40 {
-                let got = eval_children(&sh, &tree, &mut pr, 0, b).full;
+                let got = full_children(&sh, &tree, &mut pr, &b).full;
                 let side = b.dim() * 0.5 * tree.root_size;
                 let h = b.dim() * 0.5;
                 let inside = |pr: &mut Probe, ijk: [usize; 3]| {
@@ -705,6 +855,61 @@ mod tests {
                 assert!(by_corner > 0, "the corner lattice was never needed");
             }
         }
+    }
+
+    #[test]
+    fn a_clear_child_is_full_only_when_one_of_its_own_children_is() {
+        // Down the Mandelbulb zoom's path, seen from its first camera: eval_children keeps the
+        // full test's children except those whose plane is clear of their cube and whose own
+        // children all test empty. Such children exist on this path (the shell in front of the
+        // surface), and a clear child kept has a full child of its own. Children no wider
+        // than the footprint of the ray that asked are final and keep the plain test.
+        let p = path_preset("mandelbulb").unwrap();
+        let mut sh = Shader::new(&p.scene, DEFAULT_MARGIN).unwrap();
+        let tree = Octree::new(DVec3::splat(-1.5), 3.0, 3, 1 << 12);
+        sh.origin.hi = tree.root_min;
+        let target = p.path.target().unwrap();
+        let cam = p.path.camera(0, 300, 1e15, 40.0);
+        sh.view = View {
+            eye: cam.eye - tree.root_min,
+            scale: (target - cam.eye).length(),
+        };
+        let u = tree.to_u(target);
+        let mut pr = Probe::new();
+        let (mut kept_clear, mut dropped) = (0, 0);
+        let mut b = BoxU::ROOT;
+        for _ in 0..30 {
+            // The path's box and its children: the shell lies beside the path, not on it.
+            for x in std::iter::once(b).chain((0..8).map(|o| b.child(o))) {
+                let plain = full_children(&sh, &tree, &mut pr, &x);
+                let got = eval_children(&sh, &tree, &mut pr, (0, x), 0.0);
+                // Children no wider than the asking ray's footprint keep the plain test.
+                let footprint = x.dim() * 0.5;
+                let fine = eval_children(&sh, &tree, &mut pr, (0, x), footprint);
+                assert_eq!(fine.full, plain.full, "depth {}: final children", x.depth);
+                assert_eq!(
+                    got.full & !plain.full,
+                    0,
+                    "depth {}: a child not full",
+                    x.depth
+                );
+                let h = x.dim() * 0.25 * tree.root_size;
+                for o in (0..8).filter(|o| plain.full >> o & 1 == 1) {
+                    let plane = sh.surface(&mut pr, plain.centres[o], h, plain.d[o]).plane;
+                    let below = full_children(&sh, &tree, &mut pr, &x.child(o)).full;
+                    let any = any_child_full(&sh, &tree, &mut pr, &x, o, &plain);
+                    assert_eq!(any, below != 0, "depth {} child {o}", x.depth);
+                    let kept = got.full >> o & 1 == 1;
+                    let want = !plane.is_clear() || below != 0;
+                    assert_eq!(kept, want, "depth {} child {o}", x.depth);
+                    kept_clear += (kept && plane.is_clear()) as u32;
+                    dropped += !kept as u32;
+                }
+            }
+            b = b.child(b.octant_of(u));
+        }
+        assert!(dropped > 0, "no clear child was dropped");
+        assert!(kept_clear > 0, "no clear child was kept");
     }
 
     #[test]

@@ -109,6 +109,12 @@ impl SurfacePlane {
         )
     }
 
+    /// True when the plane lies clear of the cube on its outer side: the leaf's surface point
+    /// is outside it, so rays pass the whole leaf.
+    pub fn is_clear(self) -> bool {
+        self.is_some() && self.decode_l1().1 <= -1.0
+    }
+
     /// The unit normal and the offset of the plane from the cube's centre along it, in half
     /// sides.
     pub fn decode(self) -> (DVec3, f64) {
