@@ -499,7 +499,9 @@ pub struct Children {
 /// make, made before it is drawn. Such a child is the conservative full test's shell in front
 /// of an underestimated surface (two thirds of the Mandelbulb zoom's full leaves, three
 /// quarters of which emptied when split later). Children at or below `final_side` keep the
-/// plain test, so settled trees are unchanged.
+/// plain test, so settled trees are unchanged, up to one approximation: the footprint is the
+/// asking ray's at the parent, so a child within a few tenths of a percent of it can fall on
+/// either side (and with several threads, which ray asks first is a race).
 pub fn eval_children(
     sh: &Shader,
     tree: &Octree,
