@@ -300,7 +300,7 @@ impl Viewport {
 mod tests {
     use super::*;
     use crate::worker::Reply;
-    use std::time::Duration;
+    use crate::worker::tests::wait_for;
 
     /// Schedules the next frame of `key` and waits for it (at most 60 s); the viewport takes
     /// it as the window would. Returns the frame's request, the session's counters and the
@@ -311,19 +311,13 @@ mod tests {
         (key, cam, base): (u64, &Camera, &RenderRequest),
     ) -> (RenderRequest, fathom_render::Counters, Option<u64>) {
         v.schedule(w, key, cam, base, (32, 24));
-        let start = Instant::now();
-        loop {
-            for r in w.poll() {
-                if let Reply::Frame(done) = r {
-                    assert!(done.result.is_ok(), "{:?}", done.result.err());
-                    let out = (done.request.clone(), done.counters, done.octree_requests);
-                    v.accept(*done);
-                    return out;
-                }
-            }
-            assert!(start.elapsed() < Duration::from_secs(60), "no frame");
-            std::thread::sleep(Duration::from_millis(2));
-        }
+        let Reply::Frame(done) = wait_for(w, |r| matches!(r, Reply::Frame(_))) else {
+            unreachable!()
+        };
+        assert!(done.result.is_ok(), "{:?}", done.result.err());
+        let out = (done.request.clone(), done.counters, done.octree_requests);
+        v.accept(*done);
+        out
     }
 
     #[test]

@@ -337,7 +337,7 @@ fn picture(frame: &fathom_core::frame::Frame, stats: Stats) -> Picture {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use std::time::Duration;
 
@@ -360,7 +360,7 @@ mod tests {
     }
 
     /// Polls until a reply `want` accepts arrives (at most 60 s).
-    fn wait_for(w: &mut Worker, want: impl Fn(&Reply) -> bool) -> Reply {
+    pub(crate) fn wait_for(w: &mut Worker, want: impl Fn(&Reply) -> bool) -> Reply {
         let start = Instant::now();
         loop {
             if let Some(r) = w.poll().into_iter().find(|r| want(r)) {

@@ -52,9 +52,9 @@ impl OctreeBackend {
             counters.octrees_built += 1;
             *slot = Some(OctreeBackend { explorer, key });
         }
+        // The kept explorer's settings differ at most in the budgets: take the new ones.
         let ob = slot.as_mut().expect("built above");
-        ob.explorer.cfg.subdivide_ms = cfg.subdivide_ms;
-        ob.explorer.cfg.target_fps = cfg.target_fps;
+        ob.explorer.cfg = cfg;
         Ok(ob)
     }
 

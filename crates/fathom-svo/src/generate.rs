@@ -546,50 +546,90 @@ fn any_child_full(
     t: &ChildTests,
 ) -> bool {
     let cb = b.child(o);
-    let hd = cb.dim() * 0.5 * tree.root_size * 0.5 * 3f64.sqrt();
-    let centres: [DVec3; 8] = std::array::from_fn(|g| tree.centre_local(&cb.child(g)));
-    let d = sh.distances(ev, &centres);
-    if centres
-        .iter()
-        .zip(&d)
-        .any(|(&c, &d)| sh.full_distance(d, c, hd))
-    {
+    if centre_test(sh, tree, ev, &cb).2 != 0 {
         return true;
     }
     if !sh.corner_test {
         return false;
     }
-    let inside = |d: f64| d <= 0.0 || d.is_nan();
-    // The child's lattice point `ijk` (0..=2 per axis): a corner when every coordinate is 0 or
-    // 2, the centre at (1, 1, 1).
-    let corner_of_b = |ijk: [usize; 3]| {
-        let q = [0, 1, 2].map(|a| (o >> a & 1) + ijk[a] / 2);
-        q[0] + 3 * q[1] + 9 * q[2]
-    };
-    let lattice = |i: usize| [i % 3, i / 3 % 3, i / 9];
+    // Every point of the child's lattice is a corner of one of its children: one inside
+    // makes that child full. Its centre is `t.d[o]`; its corners are in `b`'s lattice.
     if inside(t.d[o]) {
         return true;
     }
-    let known =
-        |ijk: [usize; 3]| ijk == [1, 1, 1] || (t.lattice.is_some() && ijk.iter().all(|&x| x != 1));
-    if let Some(l) = &t.lattice
-        && (0..27).any(|i| lattice(i).iter().all(|&x| x != 1) && l[corner_of_b(lattice(i))])
-    {
+    let corners = match &t.lattice {
+        Some(l) => (0..8).any(|k| l[corner_index(o, k)]),
+        None => {
+            let pts: [DVec3; 8] = std::array::from_fn(|k| {
+                lattice_point(tree, &cb, [0, 1, 2].map(|a| 2 * (k >> a & 1)))
+            });
+            sh.distances(ev, &pts).into_iter().any(inside)
+        }
+    };
+    if corners {
         return true;
     }
-    let h = cb.dim() * 0.5;
-    let mut pts = [DVec3::ZERO; 26];
-    let mut n = 0;
-    for ijk in (0..27).map(lattice).filter(|&ijk| !known(ijk)) {
-        pts[n] = tree.local_world([0, 1, 2].map(|a| cb.min[a] + h * ijk[a] as f64));
-        n += 1;
+    // The 18 others: a coordinate at the middle, not all three.
+    let others: [DVec3; 18] = std::array::from_fn(|k| {
+        let ijk = LATTICE_MIDDLES[k];
+        lattice_point(tree, &cb, ijk)
+    });
+    sh.distances(ev, &others).into_iter().any(inside)
+}
+
+/// The points of a 3x3x3 lattice with one or two coordinates at the middle (neither a corner
+/// nor the centre), in `lattice_ijk` order.
+const LATTICE_MIDDLES: [[usize; 3]; 18] = {
+    let mut out = [[0; 3]; 18];
+    let (mut i, mut n) = (0, 0);
+    while i < 27 {
+        let ijk = lattice_ijk(i);
+        let middles = (ijk[0] == 1) as u8 + (ijk[1] == 1) as u8 + (ijk[2] == 1) as u8;
+        if middles == 1 || middles == 2 {
+            out[n] = ijk;
+            n += 1;
+        }
+        i += 1;
     }
-    if n == 18 {
-        let p18: [DVec3; 18] = std::array::from_fn(|k| pts[k]);
-        sh.distances(ev, &p18).into_iter().any(inside)
-    } else {
-        sh.distances(ev, &pts).into_iter().any(inside)
+    out
+};
+
+/// Point `i` of a 3x3x3 lattice as `ijk`, 0..=2 per axis (`i = i0 + 3 i1 + 9 i2`).
+const fn lattice_ijk(i: usize) -> [usize; 3] {
+    [i % 3, i / 3 % 3, i / 9]
+}
+
+/// The lattice index of corner `k` of child `o` in its parent's 3x3x3 lattice.
+fn corner_index(o: usize, k: usize) -> usize {
+    let ijk = [0, 1, 2].map(|a| (o >> a & 1) + (k >> a & 1));
+    ijk[0] + 3 * ijk[1] + 9 * ijk[2]
+}
+
+/// Lattice point `ijk` of box `b` (world units relative to the origin).
+fn lattice_point(tree: &Octree, b: &BoxU, ijk: [usize; 3]) -> DVec3 {
+    let h = b.dim() * 0.5;
+    tree.local_world([0, 1, 2].map(|a| b.min[a] + h * ijk[a] as f64))
+}
+
+/// The corner test's "inside": at or below zero, or NaN (never a false negative).
+fn inside(d: f64) -> bool {
+    d <= 0.0 || d.is_nan()
+}
+
+/// The centre test of the 8 children of box `b`: their centres (world units relative to the
+/// origin), the distances there and the mask of those that pass.
+fn centre_test(sh: &Shader, tree: &Octree, ev: &mut Probe, b: &BoxU) -> ([DVec3; 8], [f64; 8], u8) {
+    let side = b.dim() * 0.5 * tree.root_size;
+    let hd = side * 0.5 * 3f64.sqrt();
+    let centres: [DVec3; 8] = std::array::from_fn(|o| tree.centre_local(&b.child(o)));
+    let d = sh.distances(ev, &centres);
+    let mut full = 0u8;
+    for (o, (&c, &d)) in centres.iter().zip(&d).enumerate() {
+        if sh.full_distance(d, c, hd) {
+            full |= 1 << o;
+        }
     }
+    (centres, d, full)
 }
 
 /// The full test of the 8 children of a box ([`full_children`]).
@@ -611,37 +651,19 @@ struct ChildTests {
 /// centre test: seven packets cost what 9-11 scalar evaluations do, where the lattice filled
 /// lazily child by child took 19 on average (Mandelbulb zoom).
 fn full_children(sh: &Shader, tree: &Octree, ev: &mut Probe, b: &BoxU) -> ChildTests {
-    let side = b.dim() * 0.5 * tree.root_size;
-    let hd = side * 0.5 * 3f64.sqrt();
-    let centres: [DVec3; 8] = std::array::from_fn(|o| tree.centre_local(&b.child(o)));
-    let d = sh.distances(ev, &centres);
-    let mut full = 0u8;
-    for (o, (&c, &d)) in centres.iter().zip(&d).enumerate() {
-        if sh.full_distance(d, c, hd) {
-            full |= 1 << o;
-        }
-    }
+    let (centres, d, mut full) = centre_test(sh, tree, ev, b);
     let mut lattice = None;
     if full != 0xff && sh.corner_test {
         // Inside flags of the parent's 3x3x3 lattice (the children's corners).
-        let h = b.dim() * 0.5;
-        let point = |i: usize| {
-            let ijk = [i % 3, i / 3 % 3, i / 9];
-            tree.local_world([0, 1, 2].map(|a| b.min[a] + h * ijk[a] as f64))
-        };
-        let pts: [DVec3; 27] = std::array::from_fn(point);
-        let inside = sh.distances(ev, &pts).map(|d| d <= 0.0 || d.is_nan());
+        let pts: [DVec3; 27] = std::array::from_fn(|i| lattice_point(tree, b, lattice_ijk(i)));
+        let ins = sh.distances(ev, &pts).map(inside);
         let by_centre = full;
         for o in (0..8).filter(|o| by_centre >> o & 1 == 0) {
-            let corner = |k: usize| {
-                let ijk = [0, 1, 2].map(|a| (o >> a & 1) + (k >> a & 1));
-                ijk[0] + 3 * ijk[1] + 9 * ijk[2]
-            };
-            if (0..8).any(|k| inside[corner(k)]) {
+            if (0..8).any(|k| ins[corner_index(o, k)]) {
                 full |= 1 << o;
             }
         }
-        lattice = Some(inside);
+        lattice = Some(ins);
     }
     ChildTests {
         full,
