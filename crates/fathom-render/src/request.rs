@@ -74,10 +74,10 @@ pub struct OctreeSettings {
     pub target_fps: f64,
     /// Unify (unload bricks no ray visited) every this many stepped frames.
     pub unify_every: u32,
-    /// Side in pixels of the tiles whose corner rays find where all the tile's rays start
+    /// Side in pixels of the tiles whose frustum walk finds where all the tile's rays start
     /// (0: every ray from the eye's leaf; the images are the same), [0, 256].
     pub beam: u32,
-    /// Finest side the beam tiles are refined to (quadrants), [1, 256].
+    /// Finest side the tiles are refined to (quadrants), [1, 256].
     pub beam_min: u32,
     /// Draw leaves wider than a pixel with their surface planes instead of as cubes
     /// ([`fathom_svo::plane`]).

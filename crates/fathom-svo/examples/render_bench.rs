@@ -50,12 +50,14 @@ fn main() {
             let mut times = Vec::new();
             let mut sum = 0u64;
             let mut npr = 0.0;
+            let mut rays = 1u64;
             for _ in 0..reps {
                 let t0 = Instant::now();
                 let (img, reqs, c) = ex.render(&cam);
                 times.push(t0.elapsed().as_secs_f64() * 1e3);
                 ex.release_requests(&reqs);
                 npr = c[2] as f64 / c[0] as f64;
+                rays = c[0].max(1);
                 sum = img.colour.iter().zip(&img.depth).fold(0u64, |h, (&c, &d)| {
                     (h ^ (c as u64) ^ ((d.to_bits() as u64) << 32)).wrapping_mul(0x100000001b3)
                 });
@@ -63,9 +65,12 @@ fn main() {
             times.sort_by(|a, b| a.partial_cmp(b).unwrap());
             total_min += times[0];
             println!(
-                "{name} frame {i}: render min {:.2} ms median {:.2} ms, {npr:.2} nodes/ray, {} nodes, checksum {sum:016x}",
+                "{name} frame {i}: render min {:.2} ms median {:.2} ms, {npr:.2} nodes/ray \
+                 ({:.2} in tile walks, {} rays from the skip node), {} nodes, checksum {sum:016x}",
                 times[0],
                 times[reps / 2],
+                ex.beam_steps() as f64 / rays as f64,
+                ex.rays_from_skip(),
                 ex.tree.counts().nodes
             );
         }

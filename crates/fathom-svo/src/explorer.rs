@@ -15,6 +15,7 @@
 
 use crate::error::OctreeError;
 use crate::evict::unify;
+use crate::frustum::{Seed, TileStack, TileStart, cast_at, tile_start, walk_root};
 use crate::generate::{
     Children, Origin, Outcome, Probe, Shader, View, apply, eval_children, init_root,
 };
@@ -22,9 +23,7 @@ use crate::node::{NONE, REQUESTED, pack_rgb};
 use crate::octree::{Anchor, BoxU, Octree, dim_at};
 use crate::ray_grid::{RayGrid, RaySpan};
 use crate::root::RootSpec;
-use crate::traverse::{
-    BeamStart, Hit, Ray, Request, beam_start, cast_from, cast_kdrestart, cast_neighbour,
-};
+use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
 use fathom_core::dd::Dd;
 use fathom_core::scene::Scene;
 use fathom_core::{Camera, CameraFrame};
@@ -77,13 +76,14 @@ pub struct ExplorerConfig {
     pub min_subdivisions: usize,
     /// The root cube: fitted to the scene (default) or explicit.
     pub root: RootSpec,
-    /// Side in pixels of the tiles whose rays start where a beam of the tile's corner rays
-    /// showed they all still are in one empty leaf (eye inside the root, neighbour traversal
-    /// only; the same images), or 0 for every ray from the skip node.
+    /// Side in pixels of the tiles whose rays start where a walk of the nodes the tile's
+    /// frustum meets showed none of them can stop sooner ([`crate::frustum`]; eye inside the
+    /// root, neighbour traversal only; the same images), or 0 for every ray from the skip
+    /// node.
     pub beam: u32,
-    /// Finest tile side of the beams: a tile is cut into quadrants, each refining its
-    /// parent's start with a beam of its own corners, while the quadrants are at least this
-    /// wide (`beam` or more: one level of tiles).
+    /// Finest tile side: a tile is cut into quadrants, each refining its parent's start with
+    /// a walk of its own frustum, while the quadrants are at least this wide (`beam` or more:
+    /// one level of tiles).
     pub beam_min: u32,
     /// Draw full leaves wider than a pixel with their surface planes ([`crate::plane`])
     /// instead of as cubes: a zoom's frames show surfaces instead of staircases while detail
@@ -268,9 +268,12 @@ pub struct FrameStats {
     pub anchor_depth: u8,
     /// The largest voxel visible in this frame, in pixels ([`SvoImage::largest_voxel_px`]).
     pub largest_voxel_px: f64,
-    /// The part of `nodes_per_ray` the tiles' beams took (their corner rays' steps through
-    /// the leaves they walked, per ray of the image).
+    /// The part of `nodes_per_ray` the tiles' start walks took (the nodes their frusta met,
+    /// per ray of the image).
     pub beam_nodes_per_ray: f64,
+    /// Rays of tiles with a start that started at the skip node instead, their start point
+    /// being within a rounding margin of a leaf's face.
+    pub rays_from_skip: u64,
 }
 
 /// Resident set size of this process in bytes (Linux), or 0.
@@ -318,9 +321,13 @@ pub struct Explorer {
     skip: Option<(u32, BoxU)>,
     frame: u64,
     beam_steps: u64,
+    rays_from_skip: u64,
     /// The last render's LOD factor ([`Ray::lod`]): a requested leaf's children narrower
     /// than its ray's footprint (`t * lod`) are final for now.
     lod: f64,
+    /// Median hit distance of the last render (root units; infinite before the first): the
+    /// tile walks start from the eye's ancestor whose faces are at least this far.
+    reach: f64,
 }
 
 impl Explorer {
@@ -357,7 +364,9 @@ impl Explorer {
             skip: None,
             frame: 0,
             beam_steps: 0,
+            rays_from_skip: 0,
             lod: 0.0,
+            reach: f64::INFINITY,
         })
     }
 
@@ -366,9 +375,15 @@ impl Explorer {
         self.skip
     }
 
-    /// Node steps the tiles' beams took in the last render (included in its step count).
+    /// Nodes the tiles' start walks visited in the last render (included in its step count).
     pub fn beam_steps(&self) -> u64 {
         self.beam_steps
+    }
+
+    /// Rays of the last render that started at the skip node although their tile had a start
+    /// (see [`FrameStats::rays_from_skip`]).
+    pub fn rays_from_skip(&self) -> u64 {
+        self.rays_from_skip
     }
 
     /// Brings the skip node up to date for an eye at `o` (local units): stays if still valid,
@@ -533,6 +548,7 @@ impl Explorer {
         let size = tree.root_size;
         let pa = frame.pixel_angle(h);
         let grid = RayGrid::new(&frame, w, h);
+        let reach = self.reach;
         let beam = self.cfg.beam as usize;
         let beams = beam > 0 && trav == Traversal::Neighbour && skip.is_some();
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
@@ -542,7 +558,7 @@ impl Explorer {
                    hit: Hit,
                    crow: &mut [u32],
                    drow: &mut [f32],
-                   c: &mut [u64; 4],
+                   c: &mut [u64; 5],
                    largest: &mut f64| {
             c[0] += 1;
             c[2] += hit.steps as u64;
@@ -559,26 +575,22 @@ impl Explorer {
                 drow[x] = f32::INFINITY;
             }
         };
-        let reduce = |(mut ra, ca, la): (Vec<Request>, [u64; 4], f64),
-                      (rb, cb, lb): (Vec<Request>, [u64; 4], f64)| {
+        let reduce = |(mut ra, ca, la): (Vec<Request>, [u64; 5], f64),
+                      (rb, cb, lb): (Vec<Request>, [u64; 5], f64)| {
             ra.extend(rb);
             (ra, std::array::from_fn(|i| ca[i] + cb[i]), la.max(lb))
         };
         let (reqs, counts, largest) = self.pool.install(|| {
             if let (true, Some(skip)) = (beams, skip) {
-                // Bands of `beam` rows, each cut into `beam`-wide tiles: the tile's corner
-                // pixels' rays find where all its rays can start (`beam_start`), its quadrants
-                // refine that start down to the finest tiles, then the rows are cast as
-                // before, each ray from its finest tile's start.
+                // Bands of `beam` rows, each cut into `beam`-wide tiles: a walk of the nodes
+                // each tile's frustum meets finds where all its rays can start
+                // (`frustum::tile_start`), its quadrants refine that start down to the finest
+                // tiles, then the rows are cast as before, each ray from its finest tile's
+                // start (or from the skip node when its start point is too near a face).
                 // The tiles' corner rays, one at a time.
                 let ray = |x: usize, y: usize| {
                     let d = grid.dir(x, y);
                     Ray::new(o, [d.x, d.y, d.z], lod)
-                };
-                let skip0 = BeamStart {
-                    id: skip.0,
-                    b: skip.1,
-                    t: 0.0,
                 };
                 // The finest tiles: halve `beam` while it is even and the halves are at least
                 // `beam_min` wide (so the finest tiles tile the image on a grid of their side).
@@ -587,21 +599,32 @@ impl Explorer {
                     fine /= 2;
                 }
                 let band = beam * w as usize;
+                let from = walk_root(tree, skip, o, reach);
                 colour
                     .par_chunks_mut(band)
                     .zip(depth.par_chunks_mut(band))
                     .enumerate()
                     .map(|(k, (cband, dband))| {
                         let mut reqs = Vec::new();
-                        let mut c = [0u64; 4];
+                        let mut c = [0u64; 5];
                         let mut largest = 0f64;
                         let y0 = k * beam;
                         let y1 = y0 + cband.len() / w as usize - 1;
-                        let mut starts = FineStarts::new(w as usize, y0, y1, fine, skip0);
+                        let mut starts = FineStarts::new(w as usize, y0, y1, fine);
                         let last = (w as usize - 1, y1);
+                        let mut stack = TileStack::new();
                         for x0 in (0..w as usize).step_by(beam) {
                             let tile = (x0, y0, beam);
-                            let n = refine_tile(tree, &ray, tile, last, skip0, &mut starts);
+                            let n = refine_tile(
+                                tree,
+                                &ray,
+                                tile,
+                                last,
+                                from,
+                                None,
+                                &mut starts,
+                                &mut stack,
+                            );
                             c[2] += n;
                             c[3] += n;
                         }
@@ -612,13 +635,19 @@ impl Explorer {
                         for (j, (crow, drow)) in rows.enumerate() {
                             let y = y0 + j;
                             grid.row(y, o, lod, &mut span, |x, d, r| {
-                                let hit = cast_from(tree, r, starts.at(x, y), &mut reqs);
+                                let hit = starts
+                                    .at(x, y)
+                                    .and_then(|s| cast_at(tree, r, &s, &mut reqs))
+                                    .unwrap_or_else(|| {
+                                        c[4] += 1;
+                                        cast_neighbour(tree, r, Some(skip), &mut None, &mut reqs)
+                                    });
                                 put(x, d, hit, crow, drow, &mut c, &mut largest);
                             });
                         }
                         (reqs, c, largest)
                     })
-                    .reduce(|| (Vec::new(), [0u64; 4], 0f64), reduce)
+                    .reduce(|| (Vec::new(), [0u64; 5], 0f64), reduce)
             } else {
                 colour
                     .par_chunks_mut(w as usize)
@@ -626,7 +655,7 @@ impl Explorer {
                     .enumerate()
                     .map(|(y, (crow, drow))| {
                         let mut reqs = Vec::new();
-                        let mut c = [0u64; 4];
+                        let mut c = [0u64; 5];
                         let mut largest = 0f64;
                         // Where the previous ray of this row entered the root (eye outside).
                         let mut entry = None;
@@ -637,10 +666,12 @@ impl Explorer {
                         });
                         (reqs, c, largest)
                     })
-                    .reduce(|| (Vec::new(), [0u64; 4], 0f64), reduce)
+                    .reduce(|| (Vec::new(), [0u64; 5], 0f64), reduce)
             }
         });
         self.beam_steps = counts[3];
+        self.rays_from_skip = counts[4];
+        self.reach = median_hit(&depth, size);
         let counts = [counts[0], counts[1], counts[2]];
         let img = SvoImage {
             width: w,
@@ -806,6 +837,7 @@ impl Explorer {
             anchor_depth: self.tree.anchor.depth,
             largest_voxel_px: img.largest_voxel_px,
             beam_nodes_per_ray: self.beam_steps as f64 / c[0].max(1) as f64,
+            rays_from_skip: self.rays_from_skip,
         };
         self.frame += 1;
         (img, stats)
@@ -882,47 +914,79 @@ pub const DEEP_COST: usize = 5;
 /// anchor is the root's corner and frames are evaluated in f64 exactly as before.
 pub const ANCHOR_LEVELS_ABOVE: u8 = 36;
 
-/// The starts of one band's finest beam tiles (side `side` pixels, row-major, `cols` a row; the
-/// band's first pixel row is `y0`).
+/// The median hit distance (root units) of a sample of a frame's pixels (`depth` in world
+/// units, infinite for a miss; `size` the root's side), infinite when none hit.
+fn median_hit(depth: &[f32], size: f64) -> f64 {
+    let mut t: Vec<f32> = depth
+        .iter()
+        .step_by(61)
+        .copied()
+        .filter(|d| d.is_finite())
+        .collect();
+    if t.is_empty() {
+        return f64::INFINITY;
+    }
+    let k = t.len() / 2;
+    let (_, m, _) = t.select_nth_unstable_by(k, f32::total_cmp);
+    *m as f64 / size
+}
+
+/// The starts of one band's finest tiles (side `side` pixels, row-major, `cols` a row; the
+/// band's first pixel row is `y0`); `None` where a tile has no start (its rays start at the
+/// skip node).
 struct FineStarts {
     y0: usize,
     cols: usize,
     side: usize,
-    starts: Vec<BeamStart>,
+    starts: Vec<Option<TileStart>>,
 }
 
 impl FineStarts {
-    /// Tiles of side `side` over a band `width` pixels wide, rows `y0..=y1`, all at `start`.
-    fn new(width: usize, y0: usize, y1: usize, side: usize, start: BeamStart) -> FineStarts {
+    /// Tiles of side `side` over a band `width` pixels wide, rows `y0..=y1`, without starts.
+    fn new(width: usize, y0: usize, y1: usize, side: usize) -> FineStarts {
         let cols = width.div_ceil(side);
         FineStarts {
             y0,
             cols,
             side,
-            starts: vec![start; cols * (y1 + 1 - y0).div_ceil(side)],
+            starts: vec![None; cols * (y1 + 1 - y0).div_ceil(side)],
         }
     }
 
     /// The start of the finest tile holding pixel `(x, y)`.
-    fn at(&mut self, x: usize, y: usize) -> &mut BeamStart {
+    fn at(&mut self, x: usize, y: usize) -> &mut Option<TileStart> {
         &mut self.starts[(y - self.y0) / self.side * self.cols + x / self.side]
     }
 }
 
-/// Finds the beam start of the tile `(x0, y0, side)` (clipped to the last pixel `last`) from
-/// its parent's start `from`, and recursively its quadrants' from it down to the finest side,
-/// whose starts go into `out`. Returns the beams' node steps.
+/// Finds the start of the tile `(x0, y0, side)` (clipped to the last pixel `last`) by a walk
+/// of the nodes its frustum meets, seeded by its parent's start `parent` (without one, by the
+/// node `from` holding the eye),
+/// and recursively its quadrants' from it down to the finest side, whose starts go into `out`.
+/// A tile without a start of its own keeps its parent's (valid for all the parent's rays).
+/// Returns the nodes the walks visited.
+#[allow(clippy::too_many_arguments)]
 fn refine_tile(
     tree: &Octree,
     ray: &impl Fn(usize, usize) -> Ray,
     (x0, y0, side): (usize, usize, usize),
     last: (usize, usize),
-    from: BeamStart,
+    from: (u32, BoxU),
+    parent: Option<TileStart>,
     out: &mut FineStarts,
+    stack: &mut TileStack,
 ) -> u64 {
     let (x1, y1) = ((x0 + side - 1).min(last.0), (y0 + side - 1).min(last.1));
     let corners = [ray(x0, y0), ray(x1, y0), ray(x0, y1), ray(x1, y1)];
-    let (s, n) = beam_start(tree, &corners, from);
+    let seed = match parent {
+        None => Some(Seed::at_eye(&corners, from)),
+        Some(p) => Seed::within(tree, &corners, &p),
+    };
+    let (s, n) = match seed {
+        Some(sd) => tile_start(tree, &corners, &sd, stack),
+        None => (None, 0),
+    };
+    let s = s.or(parent);
     let mut n = n as u64;
     if side <= out.side {
         *out.at(x0, y0) = s;
@@ -932,7 +996,7 @@ fn refine_tile(
     for (dx, dy) in [(0, 0), (half, 0), (0, half), (half, half)] {
         let (qx, qy) = (x0 + dx, y0 + dy);
         if qx <= last.0 && qy <= last.1 {
-            n += refine_tile(tree, ray, (qx, qy, half), last, s, out);
+            n += refine_tile(tree, ray, (qx, qy, half), last, from, s, out, stack);
         }
     }
     n
@@ -945,14 +1009,16 @@ fn refine_tile(
 /// against 231-289, five interleaved pairs) and the saving goes to the frame rate.
 pub const DEFAULT_SUBDIVIDE_MS: f64 = 8.0;
 
-/// Default tile side of the beam start ([`ExplorerConfig::beam`]): 16-pixel tiles refined
-/// to 4 ([`DEFAULT_BEAM_MIN`]) took the Mandelbulb zoom's nodes per ray from 12.9 to 10.8 and
-/// its render time from 425 to 309 ms (one thread, `render_bench`, docs/svo.md).
+/// Default tile side of the start walks ([`ExplorerConfig::beam`]): with tiles of 16 the
+/// Mandelbulb zoom's render took 180 ms over three checkpoint frames against 234 ms for the
+/// corner-ray beams it replaced, 8 and 32 about the same, 4 far more (one thread,
+/// `render_bench`, docs/svo.md).
 pub const DEFAULT_BEAM: u32 = 16;
 
-/// Default finest tile side of the beam start ([`ExplorerConfig::beam_min`]): quadrants of 2
-/// cost more beam steps than they saved.
-pub const DEFAULT_BEAM_MIN: u32 = 4;
+/// Default finest tile side ([`ExplorerConfig::beam_min`]): the tile itself. Quadrants of 8
+/// walking again from the tile's start took the steps per ray from 9.4 to 7.9 in the same
+/// render time (the walks' own visits cost more than ray steps).
+pub const DEFAULT_BEAM_MIN: u32 = 16;
 
 /// Voxels seen from closer than this many pixel footprints' worth (the eye inside a full
 /// voxel, `t` = 0) count as this many pixels: keeps the figure finite for JSON.

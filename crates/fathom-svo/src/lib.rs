@@ -11,6 +11,8 @@
 //! - [`root`]: the root cube, fitted to the scene's bounds or given;
 //! - [`generate`]: the conservative full test, subdivision and recombination;
 //! - [`traverse`]: neighbour traversal with skip node and link optimisation, kd-restart;
+//! - [`frustum`]: where a pixel tile's rays can start, from a walk of the nodes its frustum
+//!   meets;
 //! - [`evict`]: bricks, visited flags, NRU unification with link repair;
 //! - [`check`]: the link-integrity checker;
 //! - [`outline`]: silhouette agreement with a sphere tracer, image similarity;
@@ -27,6 +29,7 @@ pub mod check;
 pub mod error;
 pub mod evict;
 pub mod explorer;
+pub mod frustum;
 pub mod generate;
 pub mod node;
 pub mod octree;

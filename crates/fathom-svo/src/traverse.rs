@@ -287,13 +287,19 @@ pub fn cast_neighbour(
     walk(tree, r, id, b, t, p, outside, entry, reqs)
 }
 
-/// Neighbour traversal of a pixel ray from its tile's [`BeamStart`] (see [`beam_start`]): the
-/// same hit as [`cast_neighbour`] from the skip node, after fewer steps.
-pub fn cast_from(tree: &Octree, r: &Ray, s: &BeamStart, reqs: &mut Vec<Request>) -> Hit {
-    let mut entry = None;
-    // The point only has to lie in the start leaf (the climb tests containment, and the exit
-    // from the leaf depends on the distance alone): its minimum corner does.
-    walk(tree, r, s.id, s.b, s.t, s.b.min, false, &mut entry, reqs)
+/// The neighbour traversal of ray `r` from leaf `id` (box `b`) at distance `t` and point `p`
+/// inside it (see [`crate::frustum::cast_at`]).
+#[inline(always)]
+pub(crate) fn walk_from(
+    tree: &Octree,
+    r: &Ray,
+    id: u32,
+    b: BoxU,
+    t: f64,
+    p: [f64; 3],
+    reqs: &mut Vec<Request>,
+) -> Hit {
+    walk(tree, r, id, b, t, p, false, &mut None, reqs)
 }
 
 /// The neighbour traversal's loop, from leaf (or entry node) `id` with box `b` at distance `t`
@@ -476,175 +482,4 @@ pub fn cast_kdrestart(tree: &Octree, r: &Ray, eye_inside: bool, reqs: &mut Vec<R
         t = t1;
         p = p1;
     }
-}
-
-/// Where the pixel rays of a tile start instead of the skip node: a leaf `id` (box `b`) that
-/// every ray of the tile reaches through empty leaves, and the distance `t` at which the whole
-/// tile's frustum is inside it (see [`beam_start`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BeamStart {
-    /// The leaf.
-    pub id: u32,
-    /// Its box.
-    pub b: BoxU,
-    /// Distance (root units) at which the rays start in it.
-    pub t: f64,
-}
-
-/// Relative slack on distances in the beam's tests: far above the few ulps by which a
-/// traversal's computed distance can differ from the exact one.
-const BEAM_SLACK: f64 = 1.0 / (1u64 << 40) as f64;
-
-/// Margin (relative to the coordinates' and distances' magnitude) by which the corner rays'
-/// exit points must lie inside the face a tile's rays cross: ~64 ulps, far above the rounding
-/// of an exit point (an ulp or two) and of a pixel's direction against the exact combination
-/// of the corners' (a few ulps of the distance).
-const BEAM_MARGIN: f64 = 1.0 / (1u64 << 46) as f64;
-
-/// Most leaves a beam walks (a guard).
-const BEAM_MAX_LEAVES: u32 = 4096;
-
-/// The conservative beam start of a tile of pixels whose corner pixels cast the rays `c` (all
-/// from the eye, inside the root), walking from `from`, and the node steps the beam took.
-/// `from` is the skip node (the eye's leaf at distance 0) or the start of a tile containing
-/// this one (a quadrant refined from its parent tile's start: the quadrant's rays are some of
-/// the parent's, so from the parent's start they walk the leaves they walk from the skip node,
-/// and everything below holds from there).
-///
-/// The corner rays walk in lockstep from the skip node: from a leaf `K` all four must leave
-/// through the same face `f`, into the same leaf `K'`, each exit point at least a margin
-/// inside the part of the face `K` and `K'` share (`F`, a rectangle). Why every ray of the
-/// tile then crosses from `K` into `K'` through `F` too: a pixel's direction is (up to
-/// rounding) a positive combination of the corners' (the camera's unnormalised directions are
-/// affine in the pixel coordinates), so the pixel ray's crossing of `F`'s plane is a convex
-/// combination of the corners' crossings (central projection from the eye maps the frustum's
-/// section to the convex hull of the corners'), inside `F`. By convexity of each box the pixel
-/// ray's segment between two such crossings lies in the box between them: every ray of the
-/// tile passes through exactly the leaves the corners walked, the margin keeping its rounded
-/// exit face and point the exact ones, so its traversal from the skip node steps through them
-/// in the same order.
-///
-/// A leaf `K` of the walk is a valid start at distance `S` (the latest corner entry into it)
-/// when
-/// * it and every leaf before it are empty (no ray stops there), and no LOD climb fires on
-///   them: `dim_at(depth - 1) < t * lod` is false at `t = S (1 + slack)`, above any pixel's
-///   entry distance (a pixel crosses a plane no later than the latest corner, since its
-///   direction's component towards the plane is at least the smallest corner's and its length
-///   at most 1). The test is monotone in `t` and covers every ancestor of the leaf (larger
-///   sides), so neither the climb nor the descent of the traversal stops early there, and the
-///   pixel ray's own climb test at the start (at `t = S`) does not fire either;
-/// * `S (1 + slack) < cmin * min_i x_i`, `x_i` the corners' exit distances from `K` and `cmin`
-///   a lower bound of the length of a convex combination of the corners' unit directions: a
-///   pixel ray leaves `K` no earlier than `|v| min_i x_i`, so at distance `S` every pixel ray
-///   is inside `K`, having entered before `S`.
-///
-/// Bit-identical results: the traversal leaves `K` at `max(exit, t)` with `exit` the same
-/// rounded face distance whatever `t` it entered at, and both the pixel's own entry distance
-/// and `S` are below `exit`, so from `K` on it computes exactly the same distances and points
-/// as from the skip node, including every later LOD test (the starting `t` is never seen after
-/// `K`: it cannot change which LOD node a ray stops at). Only steps and the link
-/// improvements on the skipped leaves differ (any valid link gives the same image). The leaves
-/// the rays would have marked visited before `K` are the beam's: it marks each leaf it leaves.
-pub fn beam_start(tree: &Octree, c: &[Ray; 4], from: BeamStart) -> (BeamStart, u32) {
-    let nodes = &tree.nodes;
-    let anchor = &tree.anchor;
-    let lod = c[0].lod;
-    let (mut id, mut b) = (from.id, from.b);
-    let mut best = from;
-    // A lower bound of |v| for v in the convex hull of the corner directions: v . u >= min_i
-    // d_i . u for the unit vector u along their sum.
-    let sum: [f64; 3] = std::array::from_fn(|a| c.iter().map(|r| r.d[a]).sum());
-    let len = (sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]).sqrt();
-    let cmin = c
-        .iter()
-        .map(|r| (r.d[0] * sum[0] + r.d[1] * sum[1] + r.d[2] * sum[2]) / len)
-        .fold(f64::INFINITY, f64::min)
-        * (1.0 - BEAM_SLACK);
-    if cmin.is_nan() || cmin <= 0.0 {
-        return (best, 0);
-    }
-    // Every corner is inside `from`'s leaf at its distance (it is a valid start for them all).
-    let mut t = [from.t; 4];
-    let mut steps = 0u32;
-    for _ in 0..BEAM_MAX_LEAVES {
-        let n = &nodes[id as usize];
-        if !n.is_leaf() || !n.is_empty() {
-            break;
-        }
-        let s = t[0].max(t[1]).max(t[2]).max(t[3]);
-        let s_hi = s * (1.0 + BEAM_SLACK);
-        if b.depth > 0 && dim_at(b.depth - 1) < s_hi * lod {
-            break;
-        }
-        let e = [
-            exit(&c[0], &b, t[0]),
-            exit(&c[1], &b, t[1]),
-            exit(&c[2], &b, t[2]),
-            exit(&c[3], &b, t[3]),
-        ];
-        steps += 4;
-        let x_min = e[0].0.min(e[1].0).min(e[2].0).min(e[3].0);
-        if s_hi < cmin * x_min {
-            best = BeamStart { id, b, t: s };
-        }
-        let f = e[0].1;
-        if e.iter().any(|x| x.1 != f) {
-            break;
-        }
-        let nb = n.link(f);
-        if nb == NONE {
-            break;
-        }
-        // The leaf across the face at the first corner's exit point, found as the traversal
-        // finds it (climb while outside, descend), without its LOD tests (the next round's).
-        let p = e[0].2;
-        let nd = nodes[nb as usize].depth;
-        let b_nb = if nd == b.depth {
-            b.across(f)
-        } else {
-            anchor.snap(&b.across(f), nd)
-        };
-        let (mut id2, mut b2) = (nb, b_nb);
-        let mut lost = false;
-        while !b2.contains(p) {
-            if b2.depth == 0 {
-                lost = true;
-                break;
-            }
-            id2 = nodes[id2 as usize].parent;
-            b2 = anchor.parent(&b2);
-            steps += 1;
-        }
-        if lost {
-            break;
-        }
-        while !nodes[id2 as usize].is_leaf() {
-            let o = b2.octant_of(p);
-            id2 = nodes[id2 as usize].children + o as u32;
-            b2 = b2.child(o);
-            steps += 1;
-        }
-        // Every corner's exit point a margin inside the shared face rectangle.
-        let axis = f >> 1;
-        let mag = e
-            .iter()
-            .map(|x| x.0 + x.2[0].abs().max(x.2[1].abs()).max(x.2[2].abs()))
-            .fold(0.0, f64::max);
-        let delta = mag * BEAM_MARGIN;
-        let (s1, s2) = (b.dim(), b2.dim());
-        let inside = (0..3).filter(|&a| a != axis).all(|a| {
-            let lo = b.min[a].max(b2.min[a]) + delta;
-            let hi = (b.min[a] + s1).min(b2.min[a] + s2) - delta;
-            e.iter().all(|x| x.2[a] >= lo && x.2[a] <= hi)
-        }) && e.iter().all(|x| b2.contains(x.2));
-        if !inside {
-            break;
-        }
-        // Every ray of the tile passes through this empty leaf: mark it as they would have.
-        mark_visited(tree, id);
-        id = id2;
-        b = b2;
-        t = [e[0].0, e[1].0, e[2].0, e[3].0];
-    }
-    (best, steps)
 }

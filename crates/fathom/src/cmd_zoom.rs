@@ -112,13 +112,13 @@ pub struct ZoomArgs {
     /// Unify (unload bricks no ray visited) every this many frames, >= 1.
     #[arg(long, default_value_t = 4)]
     pub unify_every: u32,
-    /// Beam tiles: each tile of this many pixels square walks its corner rays through the
-    /// empty space in front of the eye once, and all its rays start where they all still
-    /// are (0: every ray from the eye's leaf). The same images, fewer steps per ray.
+    /// Tile starts: each tile of this many pixels square walks the octree nodes its frustum
+    /// meets once, and all its rays start where none of them can have stopped yet (0: every
+    /// ray from the eye's leaf). The same images, fewer steps per ray.
     #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_BEAM)]
     pub beam: u32,
-    /// Finest beam tile: tiles are cut into quadrants, each refining its parent's start,
-    /// down to this side in pixels (the --beam value: one level).
+    /// Finest tile: tiles are cut into quadrants, each refining its parent's start with a
+    /// walk of its own, down to this side in pixels (the --beam value: one level).
     #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_BEAM_MIN)]
     pub beam_min: u32,
     /// Draw voxels wider than a pixel as the surface plane through them (shaded where the
