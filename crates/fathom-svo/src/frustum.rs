@@ -25,9 +25,9 @@
 //!
 //! The smallest of these (and the distance at which the rays can first leave the node the walk
 //! starts from, see [`Seed`]) is a lower bound of every tile ray's stop distance: a ray
-//! stopping at `t` stops on a node that meets the frustum with `dist <= t`, whose ancestors also meet it
-//! nearer, so the walk reaches it (nodes are skipped only when outside the frustum or not
-//! nearer than the bound found so far).
+//! stopping at `t` stops on a node that meets the frustum with `dist <= t`, whose ancestors
+//! also meet it nearer, so the walk reaches it (nodes are skipped only when outside the
+//! frustum or not nearer than the bound found so far).
 //!
 //! **Bit-identical results.** Each ray starts at `t` (the bound less a relative slack) in the
 //! leaf holding its point `o + t d`, found by descending from the deepest node holding the
@@ -57,7 +57,8 @@ const SLACK: f64 = 1.0 / (1u64 << 40) as f64;
 /// must be inside its leaf: ~8 ulps.
 const MARGIN: f64 = 1.0 / (1u64 << 49) as f64;
 
-/// Most nodes one tile's walk visits (a guard; the walk then stops with the bound so far).
+/// Most nodes one tile's walk visits (a guard: a walk cut short has no valid bound, and the
+/// tile gets no start).
 const MAX_VISITS: u32 = 1 << 14;
 
 /// The frustum of a tile: the eye and the four side planes through it, each given by its
@@ -174,16 +175,26 @@ pub struct Seed {
 
 impl Seed {
     /// The seed of a tile (corner rays `c`) whose walk starts at the node `id` (box `b`)
-    /// holding the eye. The tile's rays leave it through a face whose plane at distance `h`
-    /// from the eye some corner ray heads towards (the others are behind every ray: a
-    /// direction's component along the face's normal is a positive combination of the
-    /// corners'), no earlier than `h / m`, `m` the largest component a unit direction of the
+    /// holding the eye, or at the root when the eye is outside it. The tile's rays leave it
+    /// through a face whose plane at distance `h` from the eye some corner ray heads towards
+    /// (the others are behind every ray: a direction's component along the face's normal is
+    /// a positive combination of the corners'), no earlier than `h / m`, `m` the largest component a unit direction of the
     /// tile can have along the normal: at most 1, and at most the largest corner's over
     /// `cmin` (a convex combination of the corners is at least `cmin` long). The ancestors'
     /// LOD stops are at `2 side / lod` or later (capped there too; far beyond the box).
+    /// With the eye outside the root, the root is the node and there is no bound (no ray
+    /// stops outside the root, and it has no ancestors).
     pub fn at_eye(c: &[Ray; 4], (id, b): (u32, BoxU)) -> Seed {
         let o = c[0].o;
         let s = b.dim();
+        if !b.contains(o) {
+            return Seed {
+                id,
+                b,
+                t0: 0.0,
+                bound: if b.depth == 0 { f64::INFINITY } else { 0.0 },
+            };
+        }
         let cmin = cos_min(c);
         let mut bound = 2.0 * s / c[0].lod;
         for a in 0..3 {
@@ -331,12 +342,17 @@ pub fn tile_start(
                 best2 = cand * cand;
             }
         }
+        // The tolerance covers the slack on distances and the rounding of the traversal's
+        // points, which is relative to the coordinates (far larger than the distances when the
+        // eye is far from the anchor): a ray passing within that of a box may enter it.
         let mag = pc[0].abs() + pc[1].abs() + pc[2].abs() + h;
+        let near_o = fr.o.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let eps = mag * SLACK + (near_o + mag) * MARGIN;
         let dots: [f64; 4] = std::array::from_fn(|i| {
             let v = fr.n[i];
             v[0] * pc[0] + v[1] * pc[1] + v[2] * pc[2]
         });
-        let tol: [f64; 4] = std::array::from_fn(|i| -fr.l1[i] * mag * SLACK);
+        let tol: [f64; 4] = std::array::from_fn(|i| -fr.l1[i] * eps);
         // The children that meet the frustum nearer than the bound and do not lie wholly
         // before `t0` (the seed's tile walk saw them: no stop there), pushed farthest first.
         let mut kids = [(0u32, BoxU::ROOT, 0.0f64); 8];
@@ -347,7 +363,7 @@ pub fn tile_start(
             let meets = (0..4).all(|i| {
                 let v = fr.n[i];
                 dots[i] + v[0] * sg(0) + v[1] * sg(1) + v[2] * sg(2) + q * fr.l1[i] >= tol[i]
-            }) && (0..3).all(|a| fr.ahead[a] * cc[a] + q >= -mag * SLACK);
+            }) && (0..3).all(|a| fr.ahead[a] * cc[a] + q >= -eps);
             if !meets {
                 continue;
             }
@@ -372,14 +388,22 @@ pub fn tile_start(
         }
         stack.extend_from_slice(&kids[..k]);
     }
-    let t = (best * (1.0 - SLACK)).max(t0);
+    let mut t = (best * (1.0 - SLACK)).max(t0);
     if t.is_nan() || t <= 0.0 || !t.is_finite() {
         return (None, visits);
     }
-    // The deepest node holding every ray's point at `t`.
-    let (lo, hi) = points_box(c, t);
-    if !(seed.b.contains(lo) && seed.b.contains(hi)) {
-        return (None, visits);
+    // The deepest node holding every ray's point at `t`. When the bound is the seed's own
+    // (the rays leave it first), the points' box, widened by the bulge, crosses its face:
+    // any earlier distance is a valid start too, so step back until the box fits.
+    let (mut lo, mut hi) = points_box(c, t);
+    let mut tries = 0;
+    while !(seed.b.contains(lo) && seed.b.contains(hi)) {
+        tries += 1;
+        if tries > 8 {
+            return (None, visits);
+        }
+        t = t0 + (t - t0) * 0.75;
+        (lo, hi) = points_box(c, t);
     }
     let (mut id, mut b) = (seed.id, seed.b);
     while !nodes[id as usize].is_leaf() {
@@ -413,8 +437,9 @@ pub fn cast_at(tree: &Octree, r: &Ray, s: &TileStart, reqs: &mut Vec<Request>) -
 
 /// The leaf (id, box) holding ray `r`'s point at distance `t`, found from the tile's start
 /// node, with `t`, the point and the descent's steps; `None` when the point is not a margin
-/// inside the leaf (or the descent meets a node below the footprint, which a valid start
-/// never does).
+/// inside the leaf, or the leaf is not empty, or it or its parent is below the footprint
+/// (none of which a valid start meets; checked so that a bound off by a rounding never
+/// starts a ray inside a stop).
 #[inline(always)]
 fn start_leaf(
     tree: &Octree,
@@ -434,6 +459,9 @@ fn start_leaf(
         id = nodes[id as usize].children + oc as u32;
         b = b.child(oc);
         steps += 1;
+    }
+    if !nodes[id as usize].is_empty() || (b.depth > 0 && 2.0 * b.dim() < t * r.lod) {
+        return None;
     }
     // A point outside `s` is outside the leaf too: this also rejects it.
     let m = (t + p.iter().fold(0.0f64, |m, x| m.max(x.abs()))) * MARGIN;
