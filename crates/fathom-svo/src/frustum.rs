@@ -178,9 +178,10 @@ impl Seed {
     /// holding the eye, or at the root when the eye is outside it. The tile's rays leave it
     /// through a face whose plane at distance `h` from the eye some corner ray heads towards
     /// (the others are behind every ray: a direction's component along the face's normal is
-    /// a positive combination of the corners'), no earlier than `h / m`, `m` the largest component a unit direction of the
-    /// tile can have along the normal: at most 1, and at most the largest corner's over
-    /// `cmin` (a convex combination of the corners is at least `cmin` long). The ancestors'
+    /// a positive combination of the corners'), no earlier than `h / m`, `m` the largest
+    /// component a unit direction of the tile can have along the normal: at most 1, and at
+    /// most the largest corner's over `cmin` (a convex combination of the corners is at least
+    /// `cmin` long). The ancestors'
     /// LOD stops are at `2 side / lod` or later (capped there too; far beyond the box).
     /// With the eye outside the root, the root is the node and there is no bound (no ray
     /// stops outside the root, and it has no ancestors).
