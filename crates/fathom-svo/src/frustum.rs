@@ -120,26 +120,25 @@ impl Frustum {
     }
 }
 
-/// Distance from `o` to the nearest and the farthest point of box `b`.
-#[inline(always)]
-fn range(o: [f64; 3], b: &BoxU) -> (f64, f64) {
+/// Distance from `o` to the nearest point of box `b`.
+fn nearest(o: [f64; 3], b: &BoxU) -> f64 {
     let s = b.dim();
-    let (mut near, mut far) = (0.0, 0.0);
+    let mut near = 0.0;
     for a in 0..3 {
         let lo = b.min[a] - o[a];
-        let hi = lo + s;
-        let n = if lo > 0.0 {
-            lo
-        } else if hi < 0.0 {
-            -hi
-        } else {
-            0.0
-        };
-        let f = lo.abs().max(hi.abs());
+        let n = lo.max(-(lo + s)).max(0.0);
         near += n * n;
-        far += f * f;
     }
-    (near.sqrt(), far.sqrt())
+    near.sqrt()
+}
+
+/// The smallest distance from the box `lo..=hi` (a point when they are equal) to a face of
+/// box `b` containing it (negative when it is not contained).
+fn room(b: &BoxU, lo: [f64; 3], hi: [f64; 3]) -> f64 {
+    let s = b.dim();
+    (0..3)
+        .map(|a| (lo[a] - b.min[a]).min(b.min[a] + s - hi[a]))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Where a tile's rays start: node `id` (box `b`, a leaf or an inner node) holds every ray's
@@ -231,10 +230,7 @@ impl Seed {
             b = tree.anchor.parent(&b);
         }
         let (lo, hi) = points_box(c, s.t);
-        let side = b.dim();
-        let room = (0..3)
-            .map(|a| (lo[a] - b.min[a]).min(b.min[a] + side - hi[a]))
-            .fold(f64::INFINITY, f64::min);
+        let room = room(&b, lo, hi);
         if room.is_nan() || room <= 0.0 {
             return None;
         }
@@ -245,8 +241,7 @@ impl Seed {
         while ab.depth > 0 && ab.dim() * 2.0 < bound * lod {
             aid = tree.nodes[aid as usize].parent;
             ab = tree.anchor.parent(&ab);
-            let (near, _) = range(o, &ab);
-            bound = bound.min(near.max(ab.dim() / lod));
+            bound = bound.min(nearest(o, &ab).max(ab.dim() / lod));
         }
         Some(Seed {
             id,
@@ -480,11 +475,7 @@ fn start_leaf(
 pub fn walk_root(tree: &Octree, skip: (u32, BoxU), o: [f64; 3], reach: f64) -> (u32, BoxU) {
     let (mut id, mut b) = skip;
     loop {
-        let s = b.dim();
-        let d = (0..3)
-            .map(|a| (o[a] - b.min[a]).min(b.min[a] + s - o[a]))
-            .fold(f64::INFINITY, f64::min);
-        if d >= reach || b.depth == 0 {
+        if room(&b, o, o) >= reach || b.depth == 0 {
             return (id, b);
         }
         id = tree.nodes[id as usize].parent;
