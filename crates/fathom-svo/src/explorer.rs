@@ -15,7 +15,7 @@
 
 use crate::error::OctreeError;
 use crate::evict::unify;
-use crate::frustum::{Seed, TileStack, TileStart, cast_at, tile_start, walk_root};
+use crate::frustum::{Seed, StartPath, TileStack, TileStart, cast_at, tile_start, walk_root};
 use crate::generate::{
     Children, Origin, Outcome, Probe, Shader, View, apply, eval_children, init_root,
 };
@@ -646,12 +646,13 @@ impl Explorer {
                             .chunks_mut(w as usize)
                             .zip(dband.chunks_mut(w as usize));
                         let mut span = RaySpan::default();
+                        let mut path = StartPath::default();
                         for (j, (crow, drow)) in rows.enumerate() {
                             let y = y0 + j;
                             grid.row(y, o, lod, &mut span, |x, d, r| {
                                 let hit = starts
                                     .at(x, y)
-                                    .and_then(|s| cast_at(tree, r, &s, &mut reqs))
+                                    .and_then(|s| cast_at(tree, r, &s, &mut path, &mut reqs))
                                     .unwrap_or_else(|| {
                                         c[4] += 1;
                                         cast_neighbour(tree, r, skip, &mut entry, &mut reqs)
