@@ -422,6 +422,12 @@ const RETRIES: [f64; 2] = [1.0 - 1.0 / 1024.0, 1.0 - 1.0 / 32.0];
 /// traversal from the eye finds, after fewer steps; `None` when its point at the start
 /// distance, and at the [`RETRIES`], is within the margin of a face of its leaf (or outside
 /// `s`), so the caller must start it at the skip node.
+///
+/// Inlined into the render loop, the 1000-frame Mandelbulb zoom renders 5-9 % faster. Called,
+/// the pixel's ray was built on the stack one component at a time and read back two at a time
+/// by the start point's arithmetic, likely a store-forwarding stall on every ray: the multiply
+/// right after that load took 4 % of this function's samples.
+#[inline(always)]
 pub fn cast_at(
     tree: &Octree,
     r: &Ray,
