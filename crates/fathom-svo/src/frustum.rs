@@ -423,7 +423,8 @@ const RETRIES: [f64; 2] = [1.0 - 1.0 / 1024.0, 1.0 - 1.0 / 32.0];
 /// distance, and at the [`RETRIES`], is within the margin of a face of its leaf (or outside
 /// `s`), so the caller must start it at the skip node.
 ///
-/// Inlined into the render loop, the 1000-frame Mandelbulb zoom renders 5-9 % faster. Called,
+/// Inlined into the render loop, the 1000-frame Mandelbulb zoom renders 1-9 % faster (by blocks
+/// of 200 frames; 4-5 % more frames a second). Called,
 /// the pixel's ray was built on the stack one component at a time and read back two at a time
 /// by the start point's arithmetic, likely a store-forwarding stall on every ray: the multiply
 /// right after that load took 4 % of this function's samples.
@@ -446,23 +447,27 @@ pub fn cast_at(
 /// The descent that found the previous start leaf from the same tile start node and distance:
 /// the nodes from that node down to the leaf. Neighbouring rays' start points are about a
 /// pixel apart, so the next ray's leaf is usually the same leaf or a near relative; the ray
-/// climbs this path to the deepest node holding its point (box tests, no node loads) and
-/// descends from there. A descent from the tile's start node took about three steps a ray,
-/// a third of the Mandelbulb zoom's. The leaf found is the same: a box holds the point, and
-/// every node above it on the path passed the footprint test at the same distance.
+/// climbs this path to the deepest node holding its point, or to the start node (box tests,
+/// no node loads), and descends from there. A descent from the tile's start node took about
+/// three steps a ray, a third of the Mandelbulb zoom's. The leaf found is the same: a box
+/// holds the point, and every node above it on the path passed the footprint test at the
+/// same distance and LOD factor (one per frame).
 #[derive(Debug, Default)]
 pub struct StartPath {
-    /// Tile start node and start distance (bits) the path belongs to.
-    key: Option<(u32, u64)>,
+    /// Tile start node, its box and the start distance (bits) the path belongs to. The box
+    /// too: refined tiles rebuild their start boxes from a snap, so two tiles could in
+    /// principle give one node boxes that differ in a last bit.
+    key: Option<(u32, BoxU, u64)>,
     /// The descent, from the tile start node down.
     path: Vec<(u32, BoxU)>,
 }
 
-/// The leaf (id, box) holding ray `r`'s point at distance `t`, found from the tile's start
-/// node, with `t`, the point and the descent's steps; `None` when the point is not a margin
-/// inside the leaf, or the leaf is not empty, or it or its parent is below the footprint
-/// (none of which a valid start meets; checked so that a bound off by a rounding never
-/// starts a ray inside a stop).
+/// The leaf (id, box) holding ray `r`'s point at distance `t`, found by descending from the
+/// deepest node of `path` that holds the point (the tile's start node when the path is for
+/// another start), with `t`, the point and the descent's steps; `None` when the point is not
+/// a margin inside the leaf, or the leaf is not empty, or it or its parent is below the
+/// footprint (none of which a valid start meets; checked so that a bound off by a rounding
+/// never starts a ray inside a stop).
 #[inline(always)]
 fn start_leaf(
     tree: &Octree,
@@ -473,7 +478,7 @@ fn start_leaf(
 ) -> Option<(u32, BoxU, f64, [f64; 3], u32)> {
     let p: [f64; 3] = std::array::from_fn(|a| r.o[a] + t * r.d[a]);
     let nodes = &tree.nodes;
-    let key = Some((s.id, t.to_bits()));
+    let key = Some((s.id, s.b, t.to_bits()));
     let path = if path.key == key {
         while path.path.len() > 1 && !path.path[path.path.len() - 1].1.contains(p) {
             path.path.pop();
