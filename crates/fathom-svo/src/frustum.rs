@@ -424,10 +424,10 @@ const RETRIES: [f64; 2] = [1.0 - 1.0 / 1024.0, 1.0 - 1.0 / 32.0];
 /// `s`), so the caller must start it at the skip node.
 ///
 /// Inlined into the render loop, the 1000-frame Mandelbulb zoom renders 1-9 % faster (by blocks
-/// of 200 frames; 4-5 % more frames a second). Called,
-/// the pixel's ray was built on the stack one component at a time and read back two at a time
-/// by the start point's arithmetic, likely a store-forwarding stall on every ray: the multiply
-/// right after that load took 4 % of this function's samples.
+/// of 200 frames; 4-5 % more frames a second). Called, the pixel's ray was built on the stack
+/// one component at a time and read back two at a time by the start point's arithmetic,
+/// likely a store-forwarding stall on every ray: the multiply right after that load took 4 %
+/// of this function's samples.
 #[inline(always)]
 pub fn cast_at(
     tree: &Octree,
@@ -444,8 +444,8 @@ pub fn cast_at(
     Some(hit)
 }
 
-/// The descent that found the previous start leaf from the same tile start node and distance:
-/// the nodes from that node down to the leaf. Neighbouring rays' start points are about a
+/// The descent that found the previous start leaf from the same tile start (node, box and
+/// distance): the nodes from that node down to the leaf. Neighbouring rays' start points are about a
 /// pixel apart, so the next ray's leaf is usually the same leaf or a near relative; the ray
 /// climbs this path to the deepest node holding its point, or to the start node (box tests,
 /// no node loads), and descends from there. A descent from the tile's start node took about
