@@ -180,8 +180,8 @@ impl Seed {
     /// a positive combination of the corners'), no earlier than `h / m`, `m` the largest
     /// component a unit direction of the tile can have along the normal: at most 1, and at
     /// most the largest corner's over `cmin` (a convex combination of the corners is at least
-    /// `cmin` long). The ancestors'
-    /// LOD stops are at `2 side / lod` or later (capped there too; far beyond the box).
+    /// `cmin` long). The ancestors' LOD stops are at `2 side / lod` or later (capped there
+    /// too; far beyond the box).
     /// With the eye outside the root, the root is the node and there is no bound (no ray
     /// stops outside the root, and it has no ancestors).
     pub fn at_eye(c: &[Ray; 4], (id, b): (u32, BoxU)) -> Seed {
@@ -298,6 +298,8 @@ pub fn tile_start(
     let mut best2 = best * best;
     let t02 = t0 * t0;
     let lod2 = lod * lod;
+    // The eye's largest coordinate, for the culling tolerance below.
+    let eye_mag = fr.o.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     stack.clear();
     stack.push((seed.id, seed.b, 0.0));
     let mut visits = 0u32;
@@ -342,8 +344,7 @@ pub fn tile_start(
         // points, which is relative to the coordinates (far larger than the distances when the
         // eye is far from the anchor): a ray passing within that of a box may enter it.
         let mag = pc[0].abs() + pc[1].abs() + pc[2].abs() + h;
-        let near_o = fr.o.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let eps = mag * SLACK + (near_o + mag) * MARGIN;
+        let eps = mag * SLACK + (eye_mag + mag) * MARGIN;
         let dots: [f64; 4] = std::array::from_fn(|i| {
             let v = fr.n[i];
             v[0] * pc[0] + v[1] * pc[1] + v[2] * pc[2]
@@ -445,13 +446,13 @@ pub fn cast_at(
 }
 
 /// The descent that found the previous start leaf from the same tile start (node, box and
-/// distance): the nodes from that node down to the leaf. Neighbouring rays' start points are about a
-/// pixel apart, so the next ray's leaf is usually the same leaf or a near relative; the ray
-/// climbs this path to the deepest node holding its point, or to the start node (box tests,
-/// no node loads), and descends from there. A descent from the tile's start node took about
-/// three steps a ray, a third of the Mandelbulb zoom's. The leaf found is the same: a box
-/// holds the point, and every node above it on the path passed the footprint test at the
-/// same distance and LOD factor (one per frame).
+/// distance): the nodes from that node down to the leaf. Neighbouring rays' start points are
+/// about a pixel apart, so the next ray's leaf is usually the same leaf or a near relative;
+/// the ray climbs this path to the deepest node holding its point, or to the start node (box
+/// tests, no node loads), and descends from there. A descent from the tile's start node took
+/// about three steps a ray, a third of the Mandelbulb zoom's. The leaf found is the same: a
+/// box holds the point, and every node above it on the path passed the footprint test at
+/// the same distance and LOD factor (one per frame).
 #[derive(Debug, Default)]
 pub struct StartPath {
     /// Tile start node, its box and the start distance (bits) the path belongs to. The box
@@ -479,17 +480,15 @@ fn start_leaf(
     let p: [f64; 3] = std::array::from_fn(|a| r.o[a] + t * r.d[a]);
     let nodes = &tree.nodes;
     let key = Some((s.id, s.b, t.to_bits()));
-    let path = if path.key == key {
-        while path.path.len() > 1 && !path.path[path.path.len() - 1].1.contains(p) {
-            path.path.pop();
-        }
-        &mut path.path
-    } else {
+    if path.key != key {
         path.key = key;
         path.path.clear();
         path.path.push((s.id, s.b));
-        &mut path.path
-    };
+    }
+    let path = &mut path.path;
+    while path.len() > 1 && !path[path.len() - 1].1.contains(p) {
+        path.pop();
+    }
     let (mut id, mut b) = path[path.len() - 1];
     let mut steps = 0;
     while !nodes[id as usize].is_leaf() {
