@@ -642,23 +642,30 @@ impl Explorer {
                             c[2] += n;
                             c[3] += n;
                         }
-                        let rows = cband
-                            .chunks_mut(w as usize)
-                            .zip(dband.chunks_mut(w as usize));
                         let mut span = RaySpan::default();
                         let mut path = StartPath::default();
-                        for (j, (crow, drow)) in rows.enumerate() {
-                            let y = y0 + j;
-                            grid.row(y, o, lod, &mut span, |x, d, r| {
-                                let hit = starts
-                                    .at(x, y)
-                                    .and_then(|s| cast_at(tree, r, &s, &mut path, &mut reqs))
-                                    .unwrap_or_else(|| {
-                                        c[4] += 1;
-                                        cast_neighbour(tree, r, skip, &mut entry, &mut reqs)
-                                    });
-                                put(x, d, hit, crow, drow, &mut c, &mut largest);
-                            });
+                        // A finest tile at a time, row by row inside it: its rays share a
+                        // start, so each keeps the previous ray's descent path
+                        // (`StartPath`); cast row by row across the band, every 16th ray
+                        // began a fresh descent at a tile boundary.
+                        let wu = w as usize;
+                        for x0 in (0..wu).step_by(fine) {
+                            let n = fine.min(wu - x0);
+                            for j in 0..=y1 - y0 {
+                                let y = y0 + j;
+                                let crow = &mut cband[j * wu..(j + 1) * wu];
+                                let drow = &mut dband[j * wu..(j + 1) * wu];
+                                grid.segment(y, x0, n, o, lod, &mut span, |x, d, r| {
+                                    let hit = starts
+                                        .at(x, y)
+                                        .and_then(|s| cast_at(tree, r, &s, &mut path, &mut reqs))
+                                        .unwrap_or_else(|| {
+                                            c[4] += 1;
+                                            cast_neighbour(tree, r, skip, &mut entry, &mut reqs)
+                                        });
+                                    put(x, d, hit, crow, drow, &mut c, &mut largest);
+                                });
+                            }
                         }
                         (reqs, c, largest)
                     })

@@ -60,12 +60,27 @@ impl RayGrid {
         span: &mut RaySpan,
         mut f: impl FnMut(usize, DVec3, &Ray),
     ) {
-        let w = self.cols.len();
-        for x0 in (0..w).step_by(SPAN) {
-            let n = SPAN.min(w - x0);
-            self.span(y, x0, n, span);
-            for i in 0..n {
-                f(x0 + i, span.dir(i), &span.ray(i, o, lod));
+        self.segment(y, 0, self.cols.len(), o, lod, span, &mut f);
+    }
+
+    /// [`RayGrid::row`] for the pixels `x0..x0 + n` of row `y` only.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn segment(
+        &self,
+        y: usize,
+        x0: usize,
+        n: usize,
+        o: [f64; 3],
+        lod: f64,
+        span: &mut RaySpan,
+        mut f: impl FnMut(usize, DVec3, &Ray),
+    ) {
+        for a in (x0..x0 + n).step_by(SPAN) {
+            let k = SPAN.min(x0 + n - a);
+            self.span(y, a, k, span);
+            for i in 0..k {
+                f(a + i, span.dir(i), &span.ray(i, o, lod));
             }
         }
     }
@@ -157,6 +172,26 @@ mod tests {
                     assert_eq!(grid.dir(x, y).to_array(), d.to_array(), "pixel {x},{y}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_segment_visits_its_pixels_in_order_with_the_grids_rays() {
+        let cam = Camera::default();
+        let frame = cam.frame();
+        let (w, h) = (3 * SPAN as u32 + 5, 4);
+        let grid = RayGrid::new(&frame, w, h);
+        let mut span = RaySpan::default();
+        // Segments inside one span, across span boundaries, the whole row and an empty one.
+        for (x0, n) in [(3, 9), (SPAN - 2, SPAN + 7), (0, w as usize), (17, 0)] {
+            let mut seen = Vec::new();
+            grid.segment(2, x0, n, [0.5; 3], 0.25, &mut span, |x, d, r| {
+                let want = Ray::new([0.5; 3], grid.dir(x, 2).to_array(), 0.25);
+                assert_eq!(d.to_array(), want.d, "pixel {x}");
+                assert_eq!((r.d, r.inv), (want.d, want.inv), "pixel {x}");
+                seen.push(x);
+            });
+            assert_eq!(seen, (x0..x0 + n).collect::<Vec<_>>());
         }
     }
 
