@@ -1031,8 +1031,11 @@ fn refine_tile(
 /// 12 until 2026-12-03, when the colouring's normal and occlusion samples began to be
 /// evaluated four f64 lanes at a time: at 8 ms the 300-frame zooms to 1e15 split about as
 /// many leaves a frame as they did at 12 (Menger 360-522 against 317-456, Mandelbulb 223-309
-/// against 231-289, five interleaved pairs) and the saving goes to the frame rate.
-pub const DEFAULT_SUBDIVIDE_MS: f64 = 8.0;
+/// against 231-289, five interleaved pairs) and the saving goes to the frame rate. 8 until
+/// 2026-12-05, when the full children's line-of-sight traces began to run four lanes at a
+/// time: at 7 ms the 1000-frame Mandelbulb zoom splits 273-275 leaves a frame, as it did at
+/// 8 (`--subdivide-ms 8` now splits 315-317, for an image similarity within 0.01 of 7's).
+pub const DEFAULT_SUBDIVIDE_MS: f64 = 7.0;
 
 /// Default tile side of the start walks ([`ExplorerConfig::beam`]): with tiles of 16 the
 /// Mandelbulb zoom's render took 180 ms over three checkpoint frames against 234 ms for the
