@@ -323,9 +323,8 @@ pub struct Explorer {
     frame: u64,
     beam_steps: u64,
     rays_from_skip: u64,
-    /// First frame whose render may use tile starts with the eye outside the root (see
-    /// [`OUTSIDE_TILES_PAUSE`]).
-    outside_tiles_from: u64,
+    /// Whether renders with the eye outside the root use tile starts.
+    outside_tiles: OutsideTiles,
     /// The last render's LOD factor ([`Ray::lod`]): a requested leaf's children narrower
     /// than its ray's footprint (`t * lod`) are final for now.
     lod: f64,
@@ -369,7 +368,7 @@ impl Explorer {
             frame: 0,
             beam_steps: 0,
             rays_from_skip: 0,
-            outside_tiles_from: 0,
+            outside_tiles: OutsideTiles::default(),
             lod: 0.0,
             reach: f64::INFINITY,
         })
@@ -378,6 +377,13 @@ impl Explorer {
     /// The current skip node and its box.
     pub fn skip(&self) -> Option<(u32, BoxU)> {
         self.skip
+    }
+
+    /// Forgets the measurements that choose between tiles and none with the eye outside the
+    /// root ([`OutsideTiles`]): the next render uses tiles (tests of the tiles themselves).
+    #[cfg(test)]
+    pub(crate) fn allow_outside_tiles(&mut self) {
+        self.outside_tiles = OutsideTiles::default();
     }
 
     /// Nodes the tiles' start walks visited in the last render (included in its step count).
@@ -557,7 +563,7 @@ impl Explorer {
         let beam = self.cfg.beam as usize;
         let beams = beam > 0
             && trav == Traversal::Neighbour
-            && (skip.is_some() || self.frame >= self.outside_tiles_from);
+            && (skip.is_some() || self.frame >= self.outside_tiles.from);
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
         // largest side over distance, compared by cross-multiplying: no division per pixel).
         let put = |x: usize,
@@ -693,8 +699,11 @@ impl Explorer {
         });
         self.beam_steps = counts[3];
         self.rays_from_skip = counts[4];
-        if beams && skip.is_none() && 2 * counts[4] > counts[0] {
-            self.outside_tiles_from = self.frame + OUTSIDE_TILES_PAUSE;
+        if beam > 0 && trav == Traversal::Neighbour && skip.is_none() {
+            // Steps per ray, a tile walk's node visits counted twice (a visit tests a box
+            // against the tile's frustum, more than a ray's step costs).
+            let cost = (counts[2] + counts[3]) as f64 / counts[0].max(1) as f64;
+            self.outside_tiles.record(self.frame, beams, cost);
         }
         self.reach = median_hit(&depth, size);
         let counts = [counts[0], counts[1], counts[2]];
@@ -1048,13 +1057,59 @@ pub const DEFAULT_BEAM: u32 = 16;
 /// render time (the walks' own visits cost more than ray steps).
 pub const DEFAULT_BEAM_MIN: u32 = 16;
 
-/// Frames without tile starts after a frame with the eye outside the root in which most rays
-/// could not use them. From outside, a tile's rays only start inside the root: where stops
-/// lie at the root's faces (the Menger zoom looks into the root's corner, whose faces are
-/// the sponge's) their start points straddle the faces and most rays fall back, the walks
-/// wasted (4 % of the render); the Mandelbulb's first frames, seen from outside, take 27
-/// steps a ray without them and 15 with them.
+/// Frames without tile starts after a frame with the eye outside the root in which tiles cost
+/// more steps a ray than the frame before it without them ([`OutsideTiles`]). From outside,
+/// a tile's rays only start inside the root: where stops lie at the root's faces (the Menger
+/// zoom looks into the root's corner, whose faces are the sponge's) their start points
+/// straddle the faces and most rays fall back, the walks wasted (4 % of the render); the
+/// Mandelbulb's first frames, seen from outside, take 15-23 steps a ray without them and 13
+/// or fewer with them. Until 2026-12-05 the pause followed any frame in which most rays fell
+/// back, which paused the Mandelbulb's first 16 frames too: most of its fallbacks are sky.
 pub const OUTSIDE_TILES_PAUSE: u64 = 16;
+
+/// The choice, while the eye is outside the root, between tile starts and none, by the steps
+/// a ray took in recent frames of each kind. A frame with tiles is compared with the last one
+/// without: costlier, and tiles pause for [`OUTSIDE_TILES_PAUSE`] frames; with no comparison
+/// from the last `4 * OUTSIDE_TILES_PAUSE` frames, the next frame goes without tiles to
+/// measure one, and tiles pause if it was the cheaper. (That measuring frame costs: the
+/// Mandelbulb's 34th frame took 87-110 ms without tiles against 40-57 with them, so the
+/// comparison is renewed rarely.)
+#[derive(Clone, Copy, Debug, Default)]
+struct OutsideTiles {
+    /// First frame that may use tiles.
+    from: u64,
+    /// Steps a ray of the last frame with tiles.
+    tiled: f64,
+    /// Steps a ray of the last frame without, and that frame.
+    untiled: Option<(f64, u64)>,
+    /// The last frame went without tiles to compare.
+    probing: bool,
+}
+
+impl OutsideTiles {
+    /// Records frame `frame`'s steps a ray, `cost`, with tiles or without (`tiled`).
+    fn record(&mut self, frame: u64, tiled: bool, cost: f64) {
+        if tiled {
+            self.tiled = cost;
+            match self.untiled {
+                Some((u, at)) if frame < at + 4 * OUTSIDE_TILES_PAUSE => {
+                    if cost > u {
+                        self.from = frame + 1 + OUTSIDE_TILES_PAUSE;
+                    }
+                }
+                _ => {
+                    self.from = frame + 2;
+                    self.probing = true;
+                }
+            }
+        } else {
+            self.untiled = Some((cost, frame));
+            if std::mem::take(&mut self.probing) && cost < self.tiled {
+                self.from = frame + 1 + OUTSIDE_TILES_PAUSE;
+            }
+        }
+    }
+}
 
 /// Voxels seen from closer than this many pixel footprints' worth (the eye inside a full
 /// voxel, `t` = 0) count as this many pixels: keeps the figure finite for JSON.
@@ -1137,6 +1192,49 @@ mod order_tests {
         ];
         order_requests(&mut r);
         assert_eq!(r.iter().map(|q| q.id).collect::<Vec<_>>(), [2, 3, 1]);
+    }
+}
+
+#[cfg(test)]
+mod outside_tiles_tests {
+    use super::*;
+
+    /// Replays costs per frame (`(tiled cost, untiled cost)`, whichever the choice asks for)
+    /// and returns which frames used tiles.
+    fn replay(frames: u64, cost: impl Fn(u64) -> (f64, f64)) -> Vec<bool> {
+        let mut o = OutsideTiles::default();
+        (0..frames)
+            .map(|f| {
+                let tiled = f >= o.from;
+                let (t, u) = cost(f);
+                o.record(f, tiled, if tiled { t } else { u });
+                tiled
+            })
+            .collect()
+    }
+
+    #[test]
+    fn tiles_stay_on_where_they_save_steps_with_a_measuring_frame_now_and_then() {
+        let used = replay(80, |_| (13.0, 20.0));
+        let off: Vec<usize> = (0..80).filter(|&f| !used[f]).collect();
+        // The first frame measures tiles, the second goes without to compare, and the
+        // comparison is renewed once it is 64 frames old.
+        assert_eq!(off, [1, 66]);
+    }
+
+    #[test]
+    fn tiles_pause_where_they_cost_steps_and_are_tried_again_after_each_pause() {
+        let used = replay(60, |_| (30.0, 20.0));
+        let on: Vec<usize> = (0..60).filter(|&f| used[f]).collect();
+        assert_eq!(on, [0, 18, 35, 52]);
+    }
+
+    #[test]
+    fn tiles_come_back_when_the_frames_without_them_grow_costlier() {
+        // Without tiles the steps grow frame by frame (the Mandelbulb's eye approaching).
+        let used = replay(60, |f| (20.0, 10.0 + f as f64 * 0.5));
+        assert!(!used[5], "tiles cost more at first");
+        assert!(used[40..].iter().all(|&u| u), "{used:?}");
     }
 }
 

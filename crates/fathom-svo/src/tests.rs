@@ -393,8 +393,9 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
 
 /// Renders with beam tiles of side `beam` (0: every ray from the skip node) refined down to
 /// `beam_min` without changing the tree; returns the image and the node steps (beams'
-/// included).
+/// included). Tiles are used even where the explorer's own choice would pause them.
 fn render_beam(ex: &mut Explorer, cam: &Camera, (beam, beam_min): (u32, u32)) -> (SvoImage, u64) {
+    ex.allow_outside_tiles();
     ex.cfg.traversal = Traversal::Neighbour;
     ex.cfg.beam = beam;
     ex.cfg.beam_min = beam_min;
