@@ -563,7 +563,7 @@ impl Explorer {
         let beam = self.cfg.beam as usize;
         let beams = beam > 0
             && trav == Traversal::Neighbour
-            && (skip.is_some() || self.frame >= self.outside_tiles.from);
+            && (skip.is_some() || self.outside_tiles.allows());
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
         // largest side over distance, compared by cross-multiplying: no division per pixel).
         let put = |x: usize,
@@ -598,8 +598,8 @@ impl Explorer {
                 // Bands of `beam` rows, each cut into `beam`-wide tiles: a walk of the nodes
                 // each tile's frustum meets finds where all its rays can start
                 // (`frustum::tile_start`), its quadrants refine that start down to the finest
-                // tiles, then the rows are cast as before, each ray from its finest tile's
-                // start (or from the skip node when its start point is too near a face).
+                // tiles, then each finest tile's rays are cast, each from the tile's start
+                // (or from the skip node when its start point is too near a face).
                 // The tiles' corner rays, one at a time.
                 let ray = |x: usize, y: usize| {
                     let d = grid.dir(x, y);
@@ -652,8 +652,8 @@ impl Explorer {
                         let mut path = StartPath::default();
                         // A finest tile at a time, row by row inside it: its rays share a
                         // start, so each keeps the previous ray's descent path
-                        // (`StartPath`); cast row by row across the band, every 16th ray
-                        // began a fresh descent at a tile boundary.
+                        // (`StartPath`); cast row by row across the band, every `fine`th
+                        // ray began a fresh descent at a tile boundary.
                         let wu = w as usize;
                         for x0 in (0..wu).step_by(fine) {
                             let n = fine.min(wu - x0);
@@ -703,7 +703,7 @@ impl Explorer {
             // Steps per ray, a tile walk's node visits counted twice (a visit tests a box
             // against the tile's frustum, more than a ray's step costs).
             let cost = (counts[2] + counts[3]) as f64 / counts[0].max(1) as f64;
-            self.outside_tiles.record(self.frame, beams, cost);
+            self.outside_tiles.record(beams, cost);
         }
         self.reach = median_hit(&depth, size);
         let counts = [counts[0], counts[1], counts[2]];
@@ -1042,7 +1042,7 @@ fn refine_tile(
 /// many leaves a frame as they did at 12 (Menger 360-522 against 317-456, Mandelbulb 223-309
 /// against 231-289, five interleaved pairs) and the saving goes to the frame rate. 8 until
 /// 2026-12-05, when the full children's line-of-sight traces began to run four lanes at a
-/// time: at 7 ms the 1000-frame Mandelbulb zoom splits 273-275 leaves a frame, as it did at
+/// time: at 7 ms the 1000-frame Mandelbulb zoom splits 270-276 leaves a frame, as it did at
 /// 8 (`--subdivide-ms 8` now splits 315-317, for an image similarity within 0.01 of 7's).
 pub const DEFAULT_SUBDIVIDE_MS: f64 = 7.0;
 
@@ -1057,8 +1057,8 @@ pub const DEFAULT_BEAM: u32 = 16;
 /// render time (the walks' own visits cost more than ray steps).
 pub const DEFAULT_BEAM_MIN: u32 = 16;
 
-/// Frames without tile starts after a frame with the eye outside the root in which tiles cost
-/// more steps a ray than the frame before it without them ([`OutsideTiles`]). From outside,
+/// Renders without tile starts after a render with the eye outside the root in which tiles
+/// cost more steps a ray than the last render without them ([`OutsideTiles`]). From outside,
 /// a tile's rays only start inside the root: where stops lie at the root's faces (the Menger
 /// zoom looks into the root's corner, whose faces are the sponge's) their start points
 /// straddle the faces and most rays fall back, the walks wasted (4 % of the render); the
@@ -1068,44 +1068,55 @@ pub const DEFAULT_BEAM_MIN: u32 = 16;
 pub const OUTSIDE_TILES_PAUSE: u64 = 16;
 
 /// The choice, while the eye is outside the root, between tile starts and none, by the steps
-/// a ray took in recent frames of each kind. A frame with tiles is compared with the last one
-/// without: costlier, and tiles pause for [`OUTSIDE_TILES_PAUSE`] frames; with no comparison
-/// from the last `4 * OUTSIDE_TILES_PAUSE` frames, the next frame goes without tiles to
-/// measure one, and tiles pause if it was the cheaper. (That measuring frame costs: the
-/// Mandelbulb's 34th frame took 87-110 ms without tiles against 40-57 with them, so the
-/// comparison is renewed rarely.)
+/// a ray took in recent renders of each kind. A render with tiles is compared with the last
+/// one without: costlier, and tiles pause for [`OUTSIDE_TILES_PAUSE`] renders; with no
+/// comparison from the last `4 * OUTSIDE_TILES_PAUSE` renders, the next render goes without
+/// tiles to measure one, and tiles pause if it was the cheaper. (That measuring render costs:
+/// the Mandelbulb's 34th frame took 87-110 ms without tiles against 40-57 with them, so the
+/// comparison is renewed rarely.) It counts renders with the eye outside, not frames: a warm
+/// start or a settle renders many times at one frame.
 #[derive(Clone, Copy, Debug, Default)]
 struct OutsideTiles {
-    /// First frame that may use tiles.
+    /// Renders with the eye outside the root recorded so far (the index of the next). Those
+    /// with the eye inside are not counted: the measuring render is the next one outside.
+    render: u64,
+    /// First render that may use tiles.
     from: u64,
-    /// Steps a ray of the last frame with tiles.
+    /// Steps a ray of the last render with tiles.
     tiled: f64,
-    /// Steps a ray of the last frame without, and that frame.
+    /// Steps a ray of the last render without, and its index.
     untiled: Option<(f64, u64)>,
-    /// The last frame went without tiles to compare.
+    /// The next render goes without tiles to compare.
     probing: bool,
 }
 
 impl OutsideTiles {
-    /// Records frame `frame`'s steps a ray, `cost`, with tiles or without (`tiled`).
-    fn record(&mut self, frame: u64, tiled: bool, cost: f64) {
+    /// Whether the next render with the eye outside the root may use tiles.
+    fn allows(&self) -> bool {
+        self.render >= self.from
+    }
+
+    /// Records a render's steps a ray, `cost`, with tiles or without (`tiled`).
+    fn record(&mut self, tiled: bool, cost: f64) {
+        let r = self.render;
+        self.render += 1;
         if tiled {
             self.tiled = cost;
             match self.untiled {
-                Some((u, at)) if frame < at + 4 * OUTSIDE_TILES_PAUSE => {
+                Some((u, at)) if r < at + 4 * OUTSIDE_TILES_PAUSE => {
                     if cost > u {
-                        self.from = frame + 1 + OUTSIDE_TILES_PAUSE;
+                        self.from = r + 1 + OUTSIDE_TILES_PAUSE;
                     }
                 }
                 _ => {
-                    self.from = frame + 2;
+                    self.from = r + 2;
                     self.probing = true;
                 }
             }
         } else {
-            self.untiled = Some((cost, frame));
+            self.untiled = Some((cost, r));
             if std::mem::take(&mut self.probing) && cost < self.tiled {
-                self.from = frame + 1 + OUTSIDE_TILES_PAUSE;
+                self.from = r + 1 + OUTSIDE_TILES_PAUSE;
             }
         }
     }
@@ -1199,15 +1210,15 @@ mod order_tests {
 mod outside_tiles_tests {
     use super::*;
 
-    /// Replays costs per frame (`(tiled cost, untiled cost)`, whichever the choice asks for)
-    /// and returns which frames used tiles.
-    fn replay(frames: u64, cost: impl Fn(u64) -> (f64, f64)) -> Vec<bool> {
+    /// Replays costs per render (`(tiled cost, untiled cost)`, whichever the choice asks
+    /// for) and returns which renders used tiles.
+    fn replay(renders: u64, cost: impl Fn(u64) -> (f64, f64)) -> Vec<bool> {
         let mut o = OutsideTiles::default();
-        (0..frames)
+        (0..renders)
             .map(|f| {
-                let tiled = f >= o.from;
+                let tiled = o.allows();
                 let (t, u) = cost(f);
-                o.record(f, tiled, if tiled { t } else { u });
+                o.record(tiled, if tiled { t } else { u });
                 tiled
             })
             .collect()

@@ -6,7 +6,8 @@
 //! normalise, three more for the reciprocal direction the slab tests use). Done pixel by pixel
 //! inside the traversal loop, perf showed that chain as 16 % of a Menger zoom's samples. Done
 //! for a [`SPAN`] of pixels in a loop with no dependency between pixels, the compiler issues
-//! them two (or more) at a time and the traversal loop only loads the results.
+//! them two (or more) at a time and the traversal loop only loads the results. The tiled
+//! render sets up a tile's row at a time ([`RayGrid::segment`], 16 pixels by default).
 
 use crate::traverse::Ray;
 use fathom_core::CameraFrame;
