@@ -402,6 +402,57 @@ impl Shader {
 
     /// The second half of [`Shader::colour`]: the colour shaded at a voxel's [`Surface`].
     pub fn shade(&self, ev: &mut Probe, s: &Surface) -> u32 {
+        let ds = if self.gradient_shading {
+            self.distances(ev, &self.occlusion_points(s))
+        } else {
+            [0.0; AO_N]
+        };
+        self.shade_with(s, &ds)
+    }
+
+    /// [`Shader::shade`] of up to four surfaces (the first `live`), their occlusion samples
+    /// evaluated together, four lanes at a time: 5 packets for four surfaces where one at a
+    /// time took 8 (each surface's 5 samples padded to two packets). Lanes compute what the
+    /// scalar path of the same packet kind computes, so the colours are [`Shader::shade`]'s.
+    pub fn shade4(&self, ev: &mut Probe, s: [&Surface; 4], live: usize) -> [u32; 4] {
+        let mut ds = [[0.0; AO_N]; 4];
+        if self.gradient_shading {
+            let mut pts = [DVec3::ZERO; 4 * AO_N];
+            for (k, s) in s.iter().take(live).enumerate() {
+                pts[k * AO_N..(k + 1) * AO_N].copy_from_slice(&self.occlusion_points(s));
+            }
+            let n = live * AO_N;
+            for a in (0..n).step_by(4) {
+                let four = std::array::from_fn(|j| pts[(a + j).min(n - 1)]);
+                let d = self.distance4(ev, four);
+                for (j, d) in d.into_iter().enumerate().take(n - a) {
+                    ds[(a + j) / AO_N][(a + j) % AO_N] = d;
+                }
+            }
+        }
+        std::array::from_fn(|k| {
+            if k < live {
+                self.shade_with(s[k], &ds[k])
+            } else {
+                0
+            }
+        })
+    }
+
+    /// Where a surface's ambient occlusion is sampled: along its normal, as the tracer does.
+    fn occlusion_points(&self, s: &Surface) -> [DVec3; AO_N] {
+        let n = s.g.normalize_or(DVec3::Y);
+        std::array::from_fn(|i| s.p + n * self.occlusion_reach(i as u32))
+    }
+
+    /// How far along the normal the occlusion's sample `i` lies.
+    fn occlusion_reach(&self, i: u32) -> f64 {
+        0.05 * self.view.scale * (0.1 + 0.9 * i as f64 / (AO_SAMPLES - 1) as f64)
+    }
+
+    /// [`Shader::shade`] given the distances at the surface's occlusion samples (`ds`, in
+    /// the order of `occlusion_points`; unused with flat colours).
+    fn shade_with(&self, s: &Surface, ds: &[f64; AO_N]) -> u32 {
         let (p, v) = (s.p, s.v);
         let mats = self.tape.materials();
         let pick = |id: f64| (id.max(0.0) as usize).min(mats.len().saturating_sub(1));
@@ -430,15 +481,9 @@ impl Shader {
         }
         let n = s.g.normalize_or(DVec3::Y);
         // Distance-field ambient occlusion, as the tracer computes it.
-        let range = 0.05 * self.view.scale;
         let (mut occ, mut w, mut wsum) = (0.0, 1.0, 0.0);
-        let at = |i: u32| range * (0.1 + 0.9 * i as f64 / (AO_SAMPLES - 1) as f64);
-        let ds = self.distances(
-            ev,
-            &std::array::from_fn::<_, { AO_SAMPLES as usize }, _>(|i| p + n * at(i as u32)),
-        );
         for i in 0..AO_SAMPLES {
-            let hh = at(i);
+            let hh = self.occlusion_reach(i);
             let d = ds[i as usize];
             occ += (1.0 - d / hh).clamp(0.0, 1.0) * w;
             wsum += 0.7f64.powi(i as i32);
@@ -599,6 +644,9 @@ impl Shader {
     }
 }
 
+/// Occlusion samples per surface ([`AO_SAMPLES`] as a length).
+const AO_N: usize = AO_SAMPLES as usize;
+
 /// Steps of a voxel's line-of-sight trace ([`Shader::sight_point`]).
 const SIGHT_STEPS: usize = 24;
 
@@ -687,12 +735,28 @@ pub fn eval_children(
             group.len(),
             side * 0.5,
         );
-        for (&o, s) in group.iter().zip(&surfaces) {
+        // The children kept, shaded together (`Shader::shade4`).
+        let mut kept = [0usize; 4];
+        let mut m = 0;
+        for (k, (&o, s)) in group.iter().zip(&surfaces).enumerate() {
             if look_deeper && s.plane.is_clear() && !any_child_full(sh, tree, ev, &b, o, &t) {
                 out.full &= !(1 << o);
                 continue;
             }
-            (out.colours[o], out.planes[o]) = (sh.shade(ev, s), s.plane);
+            kept[m] = k;
+            m += 1;
+        }
+        if m == 0 {
+            continue;
+        }
+        let colours = sh.shade4(
+            ev,
+            std::array::from_fn(|j| &surfaces[kept[j.min(m - 1)]]),
+            m,
+        );
+        for (j, &k) in kept[..m].iter().enumerate() {
+            let o = group[k];
+            (out.colours[o], out.planes[o]) = (colours[j], surfaces[k].plane);
         }
     }
     out
@@ -1117,15 +1181,18 @@ mod tests {
                 deep: true,
             };
             let mut traced = 0;
+            let shallow = sh.origin;
             for h in [3e-2, 1e-3, 4e-5, 1e-6] {
                 let c: [DVec3; 4] = std::array::from_fn(|k| {
                     t + DVec3::new(0.7, -0.4, 0.3) * (h * (k as f64 - 1.5))
                 });
-                for (origin, c) in [(sh.origin, c), (deep, c.map(|c| c - t))] {
+                for (origin, c) in [(shallow, c), (deep, c.map(|c| c - t))] {
                     sh.origin = origin;
                     let d = c.map(|c| sh.distance(&mut pr, c));
                     for live in [4, 3] {
                         let four = sh.surfaces4(&mut pr, c, d, live, h);
+                        // Shaded together, each surface takes the colour it takes alone.
+                        let together = sh.shade4(&mut pr, std::array::from_fn(|k| &four[k]), live);
                         for k in 0..4 {
                             let what = format!("{name} h {h:e} deep {} lane {k}", origin.deep);
                             if k >= live {
@@ -1133,7 +1200,7 @@ mod tests {
                                 continue;
                             }
                             let one = sh.surface(&mut pr, c[k], h, d[k]);
-                            traced += (one.plane != SurfacePlane::NONE) as usize;
+                            traced += sh.sight_point(&mut pr, c[k], h).is_some() as usize;
                             let moved = (four[k].p - one.p).length();
                             assert!(moved <= 1e-9 * h, "{what}: moved {moved:e}");
                             let dd = (four[k].v.d - one.v.d).abs();
@@ -1143,7 +1210,9 @@ mod tests {
                                 dt <= 1e-9 * one.v.trap.abs().max(1.0),
                                 "{what}: trap {dt:e}"
                             );
-                            let (a, b) = (sh.shade(&mut pr, &four[k]), sh.shade(&mut pr, &one));
+                            let a = sh.shade(&mut pr, &four[k]);
+                            assert_eq!(together[k], a, "{what}: shaded together");
+                            let b = sh.shade(&mut pr, &one);
                             for ch in 0..4 {
                                 let (x, y) = ((a >> (8 * ch)) & 255, (b >> (8 * ch)) & 255);
                                 assert!(
@@ -1156,7 +1225,10 @@ mod tests {
                 }
             }
             // Most of these voxels straddle the surface: their lines of sight find it.
-            assert!(traced >= 20, "{name}: only {traced} surfaces found");
+            assert!(
+                traced >= 40,
+                "{name}: only {traced} of 56 lines of sight found it"
+            );
         }
     }
 
