@@ -375,7 +375,7 @@ impl Shader {
         c: DVec3,
         h: f64,
         d: f64,
-        sight: Option<(DVec3, fathom_core::Value<f64>)>,
+        sight: Option<SightHit>,
     ) -> Surface {
         let found = match sight {
             Some(s) => Some(s),
@@ -546,12 +546,7 @@ impl Shader {
     /// takes [`Shader::newton_point`]. Shading there rather than at the centre is what the
     /// sphere tracer does: voxels of a face with sub-pixel holes behind it take the face's
     /// normal, not a hole wall's.
-    fn sight_point(
-        &self,
-        ev: &mut Probe,
-        c: DVec3,
-        h: f64,
-    ) -> Option<(DVec3, fathom_core::Value<f64>)> {
+    fn sight_point(&self, ev: &mut Probe, c: DVec3, h: f64) -> Option<SightHit> {
         let hd = h * 3f64.sqrt();
         let dir = (c - self.view.eye).normalize_or_zero();
         if dir == DVec3::ZERO {
@@ -586,7 +581,7 @@ impl Shader {
         c: [DVec3; 4],
         traced: [bool; 4],
         h: f64,
-    ) -> [Option<(DVec3, fathom_core::Value<f64>)>; 4] {
+    ) -> [Option<SightHit>; 4] {
         let hd = h * 3f64.sqrt();
         let dir = c.map(|c| (c - self.view.eye).normalize_or_zero());
         let mut active: [bool; 4] = std::array::from_fn(|i| traced[i] && dir[i] != DVec3::ZERO);
@@ -624,12 +619,7 @@ impl Shader {
 
     /// The surface point of a voxel whose line of sight found none: the centre `c` moved
     /// along the gradient by its distance (one Newton step, at most the half-diagonal).
-    fn newton_point(
-        &self,
-        ev: &mut Probe,
-        c: DVec3,
-        h: f64,
-    ) -> Option<(DVec3, fathom_core::Value<f64>)> {
+    fn newton_point(&self, ev: &mut Probe, c: DVec3, h: f64) -> Option<SightHit> {
         let hd = h * 3f64.sqrt();
         let g = self.gradient(ev, c, h);
         let v = self.eval(ev, c);
@@ -643,6 +633,9 @@ impl Shader {
         }
     }
 }
+
+/// A surface point found for a voxel and the tape's value there.
+type SightHit = (DVec3, fathom_core::Value<f64>);
 
 /// Occlusion samples per surface ([`AO_SAMPLES`] as a length).
 const AO_N: usize = AO_SAMPLES as usize;
@@ -1165,21 +1158,28 @@ mod tests {
         assert!(kept_clear > 0, "no clear child was kept");
     }
 
+    /// A zoom preset's shader, its zoom target and a deep origin at the target (double-double
+    /// evaluation relative to it).
+    fn at_target(name: &str) -> (Shader, DVec3, Origin) {
+        let p = path_preset(name).unwrap();
+        let sh = Shader::new(&p.scene, DEFAULT_MARGIN).unwrap();
+        let t = p.path.target().unwrap();
+        let deep = Origin {
+            hi: t,
+            lo: DVec3::splat(1e-20),
+            deep: true,
+        };
+        (sh, t, deep)
+    }
+
     #[test]
     fn four_surfaces_at_once_match_one_at_a_time() {
         // Voxels of several sizes around each zoom target, on shallow and deep frames: the
         // packet's surface points, values and colours are the scalar path's up to the
         // packet's rounding; a lane past `live` is left empty.
         for name in ["mandelbulb", "menger"] {
-            let p = path_preset(name).unwrap();
-            let mut sh = Shader::new(&p.scene, DEFAULT_MARGIN).unwrap();
-            let t = p.path.target().unwrap();
+            let (mut sh, t, deep) = at_target(name);
             let mut pr = Probe::new();
-            let deep = Origin {
-                hi: t,
-                lo: DVec3::splat(1e-20),
-                deep: true,
-            };
             let mut traced = 0;
             let shallow = sh.origin;
             for h in [3e-2, 1e-3, 4e-5, 1e-6] {
@@ -1238,18 +1238,11 @@ mod tests {
         // few ulps of the scalar paths (the packets' transcendental functions are wide's,
         // not libm's).
         for name in ["mandelbulb", "menger"] {
-            let p = path_preset(name).unwrap();
-            let mut sh = Shader::new(&p.scene, DEFAULT_MARGIN).unwrap();
-            let t = p.path.target().unwrap();
+            let (mut sh, t, deep) = at_target(name);
             let mut pr = Probe::new();
             let q: [DVec3; 4] = std::array::from_fn(|k| {
                 t + DVec3::new(1e-3 * k as f64, -7e-4 * k as f64, 3e-4) - DVec3::splat(1e-4)
             });
-            let deep = Origin {
-                hi: t,
-                lo: DVec3::splat(1e-20),
-                deep: true,
-            };
             for (origin, q) in [(sh.origin, q), (deep, q.map(|q| q - t))] {
                 sh.origin = origin;
                 let four = sh.distance4(&mut pr, q);
