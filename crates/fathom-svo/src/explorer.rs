@@ -561,9 +561,9 @@ impl Explorer {
         let grid = RayGrid::new(&frame, w, h);
         let reach = self.reach;
         let beam = self.cfg.beam as usize;
-        let beams = beam > 0
-            && trav == Traversal::Neighbour
-            && (skip.is_some() || self.outside_tiles.allows());
+        // Tile starts serve the neighbour traversal; from outside the root, while they pay.
+        let tiling = beam > 0 && trav == Traversal::Neighbour;
+        let beams = tiling && (skip.is_some() || self.outside_tiles.allows());
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
         // largest side over distance, compared by cross-multiplying: no division per pixel).
         let put = |x: usize,
@@ -699,7 +699,7 @@ impl Explorer {
         });
         self.beam_steps = counts[3];
         self.rays_from_skip = counts[4];
-        if beam > 0 && trav == Traversal::Neighbour && skip.is_none() {
+        if tiling && skip.is_none() {
             // Steps per ray, a tile walk's node visits counted twice (a visit tests a box
             // against the tile's frustum, more than a ray's step costs).
             let cost = (counts[2] + counts[3]) as f64 / counts[0].max(1) as f64;

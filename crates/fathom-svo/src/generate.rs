@@ -196,18 +196,25 @@ impl Shader {
     #[inline]
     pub fn distance4(&self, pr: &mut Probe, q: [DVec3; 4]) -> [f64; 4] {
         if self.origin.deep {
-            let d = pr
-                .dd4
-                .distance(&self.tape, Dd4::pack(&q.map(|q| self.deep_point(q))));
+            let d = pr.dd4.distance(&self.tape, self.deep_packet(q));
             return std::array::from_fn(|i| d.lane(i));
         }
+        let d = pr.x4.distance(&self.tape, self.packet(q));
+        std::array::from_fn(|i| d.lane(i))
+    }
+
+    /// Four points (relative to the origin) as one f64 packet of world coordinates.
+    #[inline]
+    fn packet(&self, q: [DVec3; 4]) -> V3<F64x4> {
         let p = q.map(|q| self.origin.hi + q);
         let lanes = |f: fn(&DVec3) -> f64| F64x4::from(p.each_ref().map(f));
-        let d = pr.x4.distance(
-            &self.tape,
-            V3::new(lanes(|v| v.x), lanes(|v| v.y), lanes(|v| v.z)),
-        );
-        std::array::from_fn(|i| d.lane(i))
+        V3::new(lanes(|v| v.x), lanes(|v| v.y), lanes(|v| v.z))
+    }
+
+    /// Four points (relative to the origin) as one double-double packet of world coordinates.
+    #[inline]
+    fn deep_packet(&self, q: [DVec3; 4]) -> V3<Dd4> {
+        Dd4::pack(&q.map(|q| self.deep_point(q)))
     }
 
     /// The scene's values (distance, materials, orbit trap) at four points (relative to the
@@ -223,29 +230,27 @@ impl Shader {
             })
         }
         if self.origin.deep {
-            return lanes(
-                pr.dd4
-                    .eval(&self.tape, Dd4::pack(&q.map(|q| self.deep_point(q)))),
-            );
+            return lanes(pr.dd4.eval(&self.tape, self.deep_packet(q)));
         }
-        let p = q.map(|q| self.origin.hi + q);
-        let lane = |f: fn(&DVec3) -> f64| F64x4::from(p.each_ref().map(f));
-        lanes(pr.x4.eval(
-            &self.tape,
-            V3::new(lane(|v| v.x), lane(|v| v.y), lane(|v| v.z)),
-        ))
+        lanes(pr.x4.eval(&self.tape, self.packet(q)))
     }
 
     /// The scene's distances at `N` points (relative to the origin), four at a time
     /// ([`Shader::distance4`]; the last packet padded by repeating its last point).
     pub fn distances<const N: usize>(&self, pr: &mut Probe, q: &[DVec3; N]) -> [f64; N] {
         let mut out = [0f64; N];
+        self.distances_into(pr, q, &mut out);
+        out
+    }
+
+    /// [`Shader::distances`] of the points `q` into `out` (as long as `q`).
+    fn distances_into(&self, pr: &mut Probe, q: &[DVec3], out: &mut [f64]) {
+        let n = q.len();
         for (j, chunk) in out.chunks_mut(4).enumerate() {
-            let four = std::array::from_fn(|k| q[(4 * j + k).min(N - 1)]);
+            let four = std::array::from_fn(|k| q[(4 * j + k).min(n - 1)]);
             let d = self.distance4(pr, four);
             chunk.copy_from_slice(&d[..chunk.len()]);
         }
-        out
     }
 
     /// The scene's distance at `q` (relative to the origin).
@@ -415,24 +420,19 @@ impl Shader {
     /// time took 8 (each surface's 5 samples padded to two packets). Lanes compute what the
     /// scalar path of the same packet kind computes, so the colours are [`Shader::shade`]'s.
     pub fn shade4(&self, ev: &mut Probe, s: [&Surface; 4], live: usize) -> [u32; 4] {
-        let mut ds = [[0.0; AO_N]; 4];
+        let mut ds = [0.0; 4 * AO_N];
         if self.gradient_shading {
             let mut pts = [DVec3::ZERO; 4 * AO_N];
             for (k, s) in s.iter().take(live).enumerate() {
                 pts[k * AO_N..(k + 1) * AO_N].copy_from_slice(&self.occlusion_points(s));
             }
             let n = live * AO_N;
-            for a in (0..n).step_by(4) {
-                let four = std::array::from_fn(|j| pts[(a + j).min(n - 1)]);
-                let d = self.distance4(ev, four);
-                for (j, d) in d.into_iter().enumerate().take(n - a) {
-                    ds[(a + j) / AO_N][(a + j) % AO_N] = d;
-                }
-            }
+            self.distances_into(ev, &pts[..n], &mut ds[..n]);
         }
         std::array::from_fn(|k| {
             if k < live {
-                self.shade_with(s[k], &ds[k])
+                let d: &[f64; AO_N] = ds[k * AO_N..(k + 1) * AO_N].try_into().unwrap();
+                self.shade_with(s[k], d)
             } else {
                 0
             }
