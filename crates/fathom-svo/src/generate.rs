@@ -317,15 +317,15 @@ impl Shader {
     /// ambient occlusion, hemisphere ambient, Blinn-Phong per light seen from [`Shader::view`])
     /// at the voxel's surface point, without soft shadows (a shadow ray per voxel would cost
     /// up to 96 evaluations). The surface point is the first one the line of sight meets,
-    /// in the voxel or behind it (`sight_point`); the normal is the tetrahedron gradient of the tape there
-    /// ([`Shader::gradient`]) with a step of half the voxel's side, the tracer's (half a pixel
-    /// footprint) once voxels are pixel sized. Shading at the surface rather than the centre keeps
-    /// neighbouring voxels of a smooth surface from taking the gradient at different offsets
-    /// from it, the grain of a field of pixel-sized cubes.
+    /// in the voxel or behind it (`sight_point`); the normal is the tetrahedron gradient of
+    /// the tape there ([`Shader::gradient`]) with a step of half the voxel's side, the
+    /// tracer's (half a pixel footprint) once voxels are pixel sized. Shading at the surface
+    /// rather than the centre keeps neighbouring voxels of a smooth surface from taking the
+    /// gradient at different offsets from it, the grain of a field of pixel-sized cubes.
     ///
     /// Also returns the voxel's [`SurfacePlane`]: through the surface point, with the normal
-    /// the colour was shaded with; clear of the cube when the point is behind the voxel; none
-    /// with flat colours or where no surface point was found.
+    /// the colour was shaded with; [`SurfacePlane::behind`] when the point is behind the
+    /// voxel; none with flat colours or where no surface point was found.
     pub fn colour(&self, ev: &mut Probe, c: DVec3, h: f64, d: f64) -> (u32, SurfacePlane) {
         let s = self.surface(ev, c, h, d);
         (self.shade(ev, &s), s.plane)
@@ -403,9 +403,7 @@ impl Shader {
         }
         let g = self.gradient(ev, p, h);
         let plane = match found {
-            // The surface is behind the voxel along the line of sight: the plane, facing back
-            // along it, is clear of the cube.
-            Some(_) if behind => SurfacePlane::new(c - p, p, c, h),
+            Some(_) if behind => SurfacePlane::behind(-dir),
             Some(_) => SurfacePlane::new(g, p, c, h),
             None => SurfacePlane::NONE,
         };
@@ -635,14 +633,14 @@ impl Shader {
 
     /// How far lines of sight are traced, in half-diagonals, and in how many steps:
     /// [`SIGHT_REACH`] and [`SIGHT_STEPS`] where the distance is an estimate (the scenes with
-    /// a shell of leaves in front of their surface), the bounding sphere and 24 steps where it
-    /// is a bound. On the Menger sponge, tracing on changed the splits a frame by -8 % and
-    /// the SSIM to the tracer by -0.02 to +0.02: no gain.
+    /// a shell of leaves in front of their surface), the bounding sphere and
+    /// [`SIGHT_STEPS_BOUND`] where it is a bound. On the Menger sponge, tracing on changed
+    /// the splits a frame by -8 % and the SSIM to the tracer by -0.02 to +0.02: no gain.
     fn sight_limits(&self) -> (f64, usize) {
         if self.corner_test {
             (SIGHT_REACH, SIGHT_STEPS)
         } else {
-            (1.0, 24)
+            (1.0, SIGHT_STEPS_BOUND)
         }
     }
 
@@ -674,6 +672,10 @@ const AO_N: usize = AO_SAMPLES as usize;
 /// that has passed the voxel can still cover a few times the voxel in the estimate's short
 /// steps near a surface.
 const SIGHT_STEPS: usize = 48;
+
+/// Steps of a voxel's line-of-sight trace on scenes whose distance is a bound, where it
+/// ends at the voxel's bounding sphere.
+const SIGHT_STEPS_BOUND: usize = 24;
 
 /// How far a voxel's line of sight is traced, in half-diagonals from its centre: on past
 /// the voxel, to what a pixel through its centre would show behind it (see

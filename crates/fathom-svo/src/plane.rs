@@ -5,7 +5,9 @@
 //! subdivisions a frame), and drawn as cubes they turn a smooth surface into a staircase of
 //! faces with a cube's silhouette. Each full leaf therefore keeps, next to its colour, the
 //! plane through the surface point its colour was shaded at, with the distance gradient there
-//! as its normal (both already computed for the colour: no extra evaluation). A ray that ends
+//! as its normal (both already computed for the colour: no extra evaluation); a leaf whose
+//! line of sight passed it and met the surface behind keeps a plane clear of its cube
+//! ([`SurfacePlane::behind`]). A ray that ends
 //! on a leaf wider than its pixel stops where it crosses that plane inside the cube, or at the
 //! entry point when it enters the cube on the plane's inner side; when it crosses the cube on
 //! the outer side it passes on to the next leaf. The cube cut by the plane is the leaf's solid
@@ -83,6 +85,16 @@ impl SurfacePlane {
         SurfacePlane(VALID | qu | qv << NORMAL_BITS | qk << (2 * NORMAL_BITS))
     }
 
+    /// The plane of a leaf whose line of sight passes it and meets the surface behind it:
+    /// normal `n` (towards the eye; any length), offset at the far end of the range on the
+    /// outer side, so it is [`SurfacePlane::is_clear`] whatever the direction (a plane through
+    /// the surface point itself decodes to an offset just above -1 when that point is barely
+    /// past the cube's bounding sphere along a diagonal). Rays pass the leaf, as the line of
+    /// sight did; it says that line met no surface in the cube, not that none crosses it.
+    pub fn behind(n: DVec3) -> SurfacePlane {
+        SurfacePlane::new(n, -n.normalize_or_zero() * 4.0, DVec3::ZERO, 1.0)
+    }
+
     /// True when the leaf has a plane.
     #[inline(always)]
     pub fn is_some(self) -> bool {
@@ -131,8 +143,8 @@ impl SurfacePlane {
         let (m, k) = self.decode_l1();
         // With `m` of unit L1 length the cube's support along it is one half side: with the
         // plane further than that behind the centre the whole cube is on the outer side (a
-        // leaf the conservative full test kept that the surface does not cross), and every
-        // ray passes.
+        // leaf the conservative full test kept whose surface point lies outside it, or
+        // behind it along its line of sight), and every ray passes.
         if k <= -1.0 {
             return None;
         }
@@ -242,6 +254,19 @@ mod tests {
             clear.meet(&Ray::new([0.5, -0.3, 0.5], [0.0, 1.0, 0.0], 0.0), &b, 0.0),
             None
         );
+        // A leaf whose line of sight met the surface behind it: clear for every direction,
+        // the body diagonals (the largest L1 length) included.
+        for n in [
+            DVec3::ONE,
+            DVec3::new(1.0, -1.0, 1.0),
+            DVec3::NEG_Z,
+            DVec3::new(0.3, 0.1, -2.0),
+        ] {
+            let pl = SurfacePlane::behind(n);
+            assert!(pl.is_clear(), "{n}: {:?}", pl.decode());
+            assert!(pl.decode().0.angle_between(n) < 0.5f64.to_radians(), "{n}");
+            assert_eq!(pl.meet(&down, &b, 1.0), None);
+        }
         // Clear of it on the inner side (above, normal up): solid, hit at the entry.
         let solid = SurfacePlane::new(DVec3::Y, c + DVec3::Y * 0.6, c, 0.5);
         assert_eq!(solid.meet(&side, &b, 1.0), Some(1.0));
