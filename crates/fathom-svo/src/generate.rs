@@ -383,16 +383,12 @@ impl Shader {
         d: f64,
         sight: Option<SightHit>,
     ) -> Surface {
-        // A line of sight met past the voxel's bounding sphere, on the far side from the eye
-        // (a Newton point never is: its step is at most the half-diagonal).
-        let dir = (c - self.view.eye).normalize_or_zero();
-        let behind = sight.is_some_and(|(p, _)| (p - c).dot(dir) > h * 3f64.sqrt());
         let found = match sight {
             Some(s) => Some(s),
             None if self.traces(d) => self.newton_point(ev, c, h),
             None => None,
         };
-        let (p, v) = found.unwrap_or_else(|| (c, self.eval(ev, c)));
+        let (p, v) = found.map_or_else(|| (c, self.eval(ev, c)), |s| (s.p, s.v));
         if !self.gradient_shading {
             return Surface {
                 p,
@@ -403,7 +399,7 @@ impl Shader {
         }
         let g = self.gradient(ev, p, h);
         let plane = match found {
-            Some(_) if behind => SurfacePlane::behind(-dir),
+            Some(s) if s.behind => SurfacePlane::behind(-s.dir),
             Some(_) => SurfacePlane::new(g, p, c, h),
             None => SurfacePlane::NONE,
         };
@@ -564,6 +560,7 @@ impl Shader {
         if dir == DVec3::ZERO {
             return None;
         }
+        let reach = hd * reach;
         let mut t = -hd;
         for _ in 0..steps {
             let p = c + dir * t;
@@ -572,10 +569,10 @@ impl Shader {
                 return None;
             }
             if v.d < 0.5 * h {
-                return Some((p, v));
+                return Some(SightHit::traced(p, v, dir, t, hd));
             }
             t += v.d;
-            if t > hd * reach {
+            if t > reach {
                 return None;
             }
         }
@@ -618,7 +615,7 @@ impl Shader {
                 if !d.is_finite() {
                     active[i] = false;
                 } else if d < 0.5 * h {
-                    out[i] = Some((p[i], v[i]));
+                    out[i] = Some(SightHit::traced(p[i], v[i], dir[i], t[i], hd));
                     active[i] = false;
                 } else {
                     t[i] += d;
@@ -654,15 +651,46 @@ impl Shader {
         let step = (v.d / len.max(1e-300)).clamp(-hd, hd);
         if len > 0.0 && step.is_finite() {
             let p = c - g / len * step;
-            Some((p, self.eval(ev, p)))
+            Some(SightHit {
+                p,
+                v: self.eval(ev, p),
+                dir: DVec3::ZERO,
+                behind: false,
+            })
         } else {
             None
         }
     }
 }
 
-/// A surface point found for a voxel and the tape's value there.
-type SightHit = (DVec3, fathom_core::Value<f64>);
+/// A surface point found for a voxel: by its line of sight ([`Shader::sight_point`]) or,
+/// when that found none, by a Newton step from its centre ([`Shader::newton_point`]).
+#[derive(Clone, Copy, Debug)]
+struct SightHit {
+    /// The point (world units relative to the origin).
+    p: DVec3,
+    /// The tape's value there.
+    v: fathom_core::Value<f64>,
+    /// The line of sight's direction (zero for a Newton point).
+    dir: DVec3,
+    /// The point lies past the voxel's bounding sphere, on the far side from the eye: the
+    /// line of sight passed the voxel (a Newton point never does: its step is at most the
+    /// half-diagonal).
+    behind: bool,
+}
+
+impl SightHit {
+    /// The hit of a line of sight in direction `dir` from the voxel's centre, `t` along it,
+    /// for a voxel of half-diagonal `hd`.
+    fn traced(p: DVec3, v: fathom_core::Value<f64>, dir: DVec3, t: f64, hd: f64) -> SightHit {
+        SightHit {
+            p,
+            v,
+            dir,
+            behind: t > hd,
+        }
+    }
+}
 
 /// Occlusion samples per surface ([`AO_SAMPLES`] as a length).
 const AO_N: usize = AO_SAMPLES as usize;
