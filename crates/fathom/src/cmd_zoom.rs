@@ -324,7 +324,8 @@ pub fn run(a: ZoomArgs) -> Result<(), String> {
         );
     }
     println!(
-        "{} {:?} {}x{}: {} frames to zoom {:.2e}; median fps {:.1} (settled {:.1}); last/first decade fps {:.2}; \
+        "{} {:?} {}x{}: {} frames to zoom {:.2e}; median fps {:.1} (settled {:.1}); \
+         fps in the first decade (zoom 10-100) {:.1}, in the last {:.1}, last/first {:.2}; \
          {:.1} nodes/ray at the end; peak resident {:.1} MiB; max/first-cycle nodes {:.3}",
         report.preset,
         report.traversal,
@@ -334,6 +335,8 @@ pub fn run(a: ZoomArgs) -> Result<(), String> {
         s.zoom_reached,
         s.median_fps,
         s.median_fps_settled,
+        s.median_fps_first_decade,
+        s.median_fps_last_decade,
         s.last_over_first,
         s.nodes_per_ray_last_decade,
         s.peak_resident_bytes as f64 / (1 << 20) as f64,
