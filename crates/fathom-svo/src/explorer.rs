@@ -1043,8 +1043,14 @@ fn refine_tile(
 /// against 231-289, five interleaved pairs) and the saving goes to the frame rate. 8 until
 /// 2026-12-05, when the full children's line-of-sight traces began to run four lanes at a
 /// time: at 7 ms the 1000-frame Mandelbulb zoom splits 270-276 leaves a frame, as it did at
-/// 8 (`--subdivide-ms 8` now splits 315-317, for an image similarity within 0.01 of 7's).
-pub const DEFAULT_SUBDIVIDE_MS: f64 = 7.0;
+/// 8 (`--subdivide-ms 8` now splits 315-317, for an image similarity within 0.01 of 7's). 7
+/// until 2026-12-05 (stop 36), when a wide full child whose line of sight passes it began to
+/// be tested one level down before its line is traced on: at 6 ms the 1000-frame Mandelbulb
+/// zoom splits 312-341 leaves a frame, as it did at 7 (308-346), for 0.5-1.2 more frames a
+/// second (three interleaved pairs); kept at 7, the finer tree rendered 0.8-3.0 fps slower
+/// in four of five pairs. The Menger's splits cost what they did, so it splits a sixth fewer
+/// (641-678 against 769-796 on a 400-frame zoom to 1e6, SSIM 0.00-0.03 lower).
+pub const DEFAULT_SUBDIVIDE_MS: f64 = 6.0;
 
 /// Default tile side of the start walks ([`ExplorerConfig::beam`]): with tiles of 16 the
 /// Mandelbulb zoom's render took 180 ms over three checkpoint frames against 234 ms for the
