@@ -19,9 +19,10 @@
 //! corner test catches it. The corners of the 8 children are the parent's 3x3x3 lattice.
 //!
 //! A conservative test keeps a shell of full voxels the surface does not cross in front of an
-//! underestimated surface. A new child whose surface point lies outside its cube (its plane is
-//! clear of it) and that is still wider than the footprint of the ray that asked for the split
-//! is therefore tested one level down at once, and dropped when none of its own children is
+//! underestimated surface. A new child whose line of sight passes it without meeting the
+//! surface, or whose surface point lies outside its cube (its plane is clear of it), and that
+//! is still wider than the footprint of the ray that asked for the split is therefore tested
+//! one level down at once, and dropped when none of its own children is
 //! full ([`eval_children`]): the decision its split would have made a frame or more later,
 //! after being drawn as a cube in front of the surface and walked through by rays.
 
@@ -617,11 +618,11 @@ impl Shader {
     /// the line from the centre): that ends it [`Sight::Passed`] with `pass`, to be traced on
     /// by a later call, and [`Sight::Lost`] without. Each step is one four-lane evaluation
     /// ([`Shader::eval4`]); a lane that has stopped repeats the point of one still tracing, so
-    /// the packet costs what its slowest line does, and a line's points are those of the
-    /// scalar trace (traced one at a time, these traces were a quarter of a Mandelbulb zoom's
-    /// subdivision time). Lanes are evaluated independently, so lines traced on in other
-    /// packets than the ones they began in reach the points they would have reached in one
-    /// call.
+    /// the packet costs what its slowest line does (traced one at a time, these traces were a
+    /// quarter of a Mandelbulb zoom's subdivision time). Lanes are evaluated independently, so
+    /// a line reaches the same points whatever lanes and packets carry it, also when traced
+    /// on in other packets than the one it began in (within a few ulps of the scalar trace,
+    /// [`Shader::sight_point`]).
     fn trace4(
         &self,
         ev: &mut Probe,
@@ -723,7 +724,8 @@ enum Sight {
     Hit(SightHit),
     /// It went past the end of the stretch without meeting the surface: to be traced on.
     Passed(SightLine),
-    /// It escaped, met a NaN, ran out of steps, or was never traced.
+    /// It escaped (went past the end of a stretch that does not pass lines on), met a NaN
+    /// or an infinite distance, ran out of steps, or was never traced.
     Lost,
 }
 
@@ -1523,6 +1525,15 @@ mod tests {
             let (a, b) = (once[k].hit().map(|x| x.p), two.hit().map(|x| x.p));
             assert_eq!(a, b, "line {k}");
             assert_eq!(a.is_some(), k != 2, "line {k}: {:?}", once[k]);
+            if let Sight::Passed(l) = near[k] {
+                assert!(l.t > hd && l.steps >= 1, "line {k}: passed at {l:?}");
+            }
+            // The scalar trace's point, up to the packet's rounding.
+            if let Some(a) = a {
+                let scalar = sh.sight_point(&mut pr, c[k], h).expect("scalar trace").p;
+                let moved = (scalar - a).length();
+                assert!(moved <= 1e-9 * h, "line {k}: packet point moved {moved:e}");
+            }
         }
     }
 
