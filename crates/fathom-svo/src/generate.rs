@@ -349,7 +349,9 @@ impl Shader {
     /// `c` and `d`): their lines of sight are traced four lanes at a time
     /// ([`Shader::sight_points`]). The surfaces are those of [`Shader::surface`] up to the
     /// packet's rounding (a few ulps per distance), which can move a surface point by one
-    /// step of the trace where a distance lies within that of the stopping threshold.
+    /// step of the trace where a distance lies within that of the stopping threshold. The
+    /// tests' reference: splits trace in two stretches ([`eval_children`]).
+    #[cfg(test)]
     pub fn surfaces4(
         &self,
         ev: &mut Probe,
@@ -400,7 +402,9 @@ impl Shader {
         }
         let g = self.gradient(ev, p, h);
         let plane = match found {
-            Some(s) if s.behind => SurfacePlane::behind(-s.dir),
+            Some(SightHit {
+                behind: Some(dir), ..
+            }) => SurfacePlane::behind(-dir),
             Some(_) => SurfacePlane::new(g, p, c, h),
             None => SurfacePlane::NONE,
         };
@@ -583,6 +587,7 @@ impl Shader {
     /// [`Shader::sight_point`] of four voxels of half side `h` at once (lanes whose `traced`
     /// is false give `None`): [`Shader::sight_lines`] traced to the full reach by
     /// [`Shader::trace4`].
+    #[cfg(test)]
     fn sight_points(
         &self,
         ev: &mut Probe,
@@ -595,19 +600,22 @@ impl Shader {
         self.trace4(ev, lines, h, reach, false).map(Sight::hit)
     }
 
-    /// The lines of sight of four voxels of half side `h` with centres `c`, not yet traced:
-    /// from the eye through each centre, starting where the line enters the voxel's bounding
-    /// sphere (`None` where `traced` is false or the eye is at the centre).
+    /// [`Shader::sight_line`] of four voxels (`None` where `traced` is false).
+    #[cfg(test)]
     fn sight_lines(&self, c: [DVec3; 4], traced: [bool; 4], h: f64) -> [Option<SightLine>; 4] {
-        let hd = h * 3f64.sqrt();
-        std::array::from_fn(|i| {
-            let dir = (c[i] - self.view.eye).normalize_or_zero();
-            (traced[i] && dir != DVec3::ZERO).then_some(SightLine {
-                c: c[i],
-                dir,
-                t: -hd,
-                steps: 0,
-            })
+        std::array::from_fn(|i| traced[i].then(|| self.sight_line(c[i], h)).flatten())
+    }
+
+    /// The line of sight of the voxel of half side `h` with centre `c`, not yet traced: from
+    /// the eye through the centre, starting where the line enters the voxel's bounding sphere
+    /// (`None` when the eye is at the centre).
+    fn sight_line(&self, c: DVec3, h: f64) -> Option<SightLine> {
+        let dir = (c - self.view.eye).normalize_or_zero();
+        (dir != DVec3::ZERO).then_some(SightLine {
+            c,
+            dir,
+            t: -h * 3f64.sqrt(),
+            steps: 0,
         })
     }
 
@@ -698,8 +706,7 @@ impl Shader {
             Some(SightHit {
                 p,
                 v: self.eval(ev, p),
-                dir: DVec3::ZERO,
-                behind: false,
+                behind: None,
             })
         } else {
             None
@@ -722,7 +729,8 @@ struct SightLine {
 enum Sight {
     /// It met the surface.
     Hit(SightHit),
-    /// It went past the end of the stretch without meeting the surface: to be traced on.
+    /// It went past the end of the stretch without meeting the surface, or is not traced yet:
+    /// to be traced on.
     Passed(SightLine),
     /// It escaped (went past the end of a stretch that does not pass lines on), met a NaN
     /// or an infinite distance, ran out of steps, or was never traced.
@@ -747,12 +755,10 @@ struct SightHit {
     p: DVec3,
     /// The tape's value there.
     v: fathom_core::Value<f64>,
-    /// The line of sight's direction (zero for a Newton point).
-    dir: DVec3,
-    /// The point lies past the voxel's bounding sphere, on the far side from the eye: the
-    /// line of sight passed the voxel (a Newton point never does: its step is at most the
-    /// half-diagonal).
-    behind: bool,
+    /// The line of sight's direction when the point lies past the voxel's bounding sphere, on
+    /// the far side from the eye: the line passed the voxel (a Newton point never does: its
+    /// step is at most the half-diagonal).
+    behind: Option<DVec3>,
 }
 
 impl SightHit {
@@ -762,8 +768,7 @@ impl SightHit {
         SightHit {
             p,
             v,
-            dir,
-            behind: t > hd,
+            behind: (t > hd).then_some(dir),
         }
     }
 }
@@ -867,16 +872,14 @@ pub fn eval_children(
     }
     // The full children's lines of sight, four at a time, as far as each child's bounding
     // sphere; on estimate scenes a line that gets there is `Passed`, to be traced on.
-    let mut sight = [Sight::Lost; 8];
-    for group in full[..n].chunks(4) {
-        let pick = |k: usize| group[k.min(group.len() - 1)];
-        let traced = std::array::from_fn(|k| k < group.len() && sh.traces(t.d[pick(k)]));
-        let lines = sh.sight_lines(std::array::from_fn(|k| t.centres[pick(k)]), traced, h);
-        let s = sh.trace4(ev, lines, h, hd, reach > 1.0);
-        for (k, &o) in group.iter().enumerate() {
-            sight[o] = s[k];
+    let mut sight: [Sight; 8] = std::array::from_fn(|o| {
+        let traced = t.full >> o & 1 == 1 && sh.traces(t.d[o]);
+        match traced.then(|| sh.sight_line(t.centres[o], h)).flatten() {
+            Some(l) => Sight::Passed(l),
+            None => Sight::Lost,
         }
-    }
+    });
+    trace_on(sh, ev, &mut sight, &full[..n], h, hd, reach > 1.0);
     // A wide child whose line passed it without meeting the surface is tested one level down
     // before its line is traced on: dropped, it needs neither the rest of the trace nor a
     // gradient (on the Mandelbulb zoom 70 % of the wide children with a clear plane were
@@ -898,17 +901,8 @@ pub fn eval_children(
         passed[np] = o;
         np += 1;
     }
-    // The kept children's lines traced on, to the reach, four at a time.
-    for group in passed[..np].chunks(4) {
-        let lines = std::array::from_fn(|k| match group.get(k).map(|&o| sight[o]) {
-            Some(Sight::Passed(l)) => Some(l),
-            _ => None,
-        });
-        let s = sh.trace4(ev, lines, h, hd * reach, false);
-        for (k, &o) in group.iter().enumerate() {
-            sight[o] = s[k];
-        }
-    }
+    // The kept children's lines traced on, to the reach.
+    trace_on(sh, ev, &mut sight, &passed[..np], h, hd * reach, false);
     // Each kept child's surface; a wide one whose plane is clear of it, not tested yet, is
     // tested one level down now.
     let mut surfaces = [Surface::NONE; 8];
@@ -943,6 +937,31 @@ pub fn eval_children(
         }
     }
     out
+}
+
+/// Traces on the lines of sight of children `which` that are [`Sight::Passed`] (the others
+/// stay as they are), four at a time, with [`Shader::trace4`]'s `until` and `pass`.
+fn trace_on(
+    sh: &Shader,
+    ev: &mut Probe,
+    sight: &mut [Sight; 8],
+    which: &[usize],
+    h: f64,
+    until: f64,
+    pass: bool,
+) {
+    for group in which.chunks(4) {
+        let lines = std::array::from_fn(|k| match group.get(k).map(|&o| sight[o]) {
+            Some(Sight::Passed(l)) => Some(l),
+            _ => None,
+        });
+        let s = sh.trace4(ev, lines, h, until, pass);
+        for (k, &o) in group.iter().enumerate() {
+            if matches!(sight[o], Sight::Passed(_)) {
+                sight[o] = s[k];
+            }
+        }
+    }
 }
 
 /// The full test of the children of `b`'s child `o` (`t` is `b`'s [`full_children`]): true
