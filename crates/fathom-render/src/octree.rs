@@ -1,7 +1,8 @@
 //! The octree backend of a session: one explorer, kept while the scene and the octree settings
 //! stay the same (so a still view settles once and a zoom or a window steps the same tree),
-//! rebuilt when either changes; the per-frame time budgets (`subdivide_ms`, `target_fps`) are
-//! not part of the tree and change in place, so a window's frame-time slider keeps the tree.
+//! rebuilt when either changes; the per-frame time budgets (`subdivide_ms`, `target_fps`) and
+//! the order requests are served in (`fovea`) are not part of the tree and change in place, so
+//! a window's frame-time slider keeps the tree.
 //! A still frame settles the tree at the view (subdividing until no leaf asks for more, within
 //! the request's frame limit) and renders it; a stepped frame renders the tree as it is and
 //! subdivides within a time budget. Frames go through the shared post effects; regions are
@@ -22,13 +23,15 @@ pub(crate) struct OctreeBackend {
     key: (u64, ExplorerConfig),
 }
 
-/// The settings that shape the tree: `cfg` with its per-frame time budgets set to their
-/// defaults (a budget decides how much a frame refines, not what the tree is).
+/// The settings that shape the tree: `cfg` with its per-frame time budgets and request order
+/// set to their defaults (they decide how much a frame refines and where first, not what the
+/// tree settles to).
 fn tree_settings(cfg: &ExplorerConfig) -> ExplorerConfig {
     let d = ExplorerConfig::default();
     ExplorerConfig {
         subdivide_ms: d.subdivide_ms,
         target_fps: d.target_fps,
+        fovea: d.fovea,
         ..cfg.clone()
     }
 }

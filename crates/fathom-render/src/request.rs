@@ -82,6 +82,10 @@ pub struct OctreeSettings {
     /// Draw leaves wider than a pixel with their surface planes instead of as cubes
     /// ([`fathom_svo::plane`]).
     pub planes: bool,
+    /// How much nearer the screen's centre subdivision requests count: a voxel's size on
+    /// screen is divided by `1 + fovea rho^2`, `rho` its distance from the centre in
+    /// half-heights (0: the largest on screen first wherever they are), [0, 64].
+    pub fovea: f64,
 }
 
 impl Default for OctreeSettings {
@@ -99,6 +103,7 @@ impl Default for OctreeSettings {
             beam: fathom_svo::explorer::DEFAULT_BEAM,
             beam_min: fathom_svo::explorer::DEFAULT_BEAM_MIN,
             planes: false,
+            fovea: fathom_svo::request_order::DEFAULT_FOVEA,
         }
     }
 }
@@ -333,6 +338,7 @@ impl RenderRequest {
             beam: o.beam,
             beam_min: o.beam_min,
             planes: o.planes,
+            fovea: o.fovea,
             root: match o.root {
                 Some(c) => RootSpec::from_cube(Some(c)),
                 None => RootSpec::Fit { half: o.fit_half },

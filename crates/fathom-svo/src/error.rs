@@ -29,6 +29,8 @@ pub enum OctreeError {
     Beam(u32),
     #[error("beam-min (finest beam tile side) {0} is out of range 1..=256 pixels")]
     BeamMin(u32),
+    #[error("fovea {0} is out of range [0, 64] (0: requests served by size on screen alone)")]
+    Fovea(f64),
     #[error(transparent)]
     Compile(#[from] CompileError),
     #[error("cannot start {threads} threads: {message}")]

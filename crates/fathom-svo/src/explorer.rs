@@ -22,6 +22,7 @@ use crate::generate::{
 use crate::node::{NONE, REQUESTED, pack_rgb};
 use crate::octree::{Anchor, BoxU, Octree, dim_at};
 use crate::ray_grid::{RayGrid, RaySpan};
+use crate::request_order::{DEFAULT_FOVEA, Fovea, RequestQueue};
 use crate::root::RootSpec;
 use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
 use fathom_core::dd::Dd;
@@ -90,6 +91,10 @@ pub struct ExplorerConfig {
     /// arrives, at the cost of the steps rays take through the leaves whose planes they pass
     /// (`docs/svo.md`, "Surface planes").
     pub planes: bool,
+    /// How much nearer the screen's centre a subdivision request counts: its size on screen
+    /// is divided by `1 + fovea rho^2`, `rho` its distance from the centre in half-heights
+    /// ([`Fovea`]; 0: the largest on screen first wherever they are), [0, 64].
+    pub fovea: f64,
 }
 
 impl Default for ExplorerConfig {
@@ -116,6 +121,7 @@ impl Default for ExplorerConfig {
             beam: DEFAULT_BEAM,
             beam_min: DEFAULT_BEAM_MIN,
             planes: false,
+            fovea: DEFAULT_FOVEA,
         }
     }
 }
@@ -156,6 +162,9 @@ impl ExplorerConfig {
         }
         if self.beam_min == 0 || self.beam_min > 256 {
             return Err(OctreeError::BeamMin(self.beam_min));
+        }
+        if !(self.fovea.is_finite() && (0.0..=64.0).contains(&self.fovea)) {
+            return Err(OctreeError::Fovea(self.fovea));
         }
         self.root.validate()
     }
@@ -331,6 +340,8 @@ pub struct Explorer {
     /// Median hit distance of the last render (root units; infinite before the first): the
     /// tile walks start from the eye's ancestor whose faces are at least this far.
     reach: f64,
+    /// The last render's view, by which the next subdivision orders its requests.
+    fovea: Fovea,
 }
 
 impl Explorer {
@@ -371,6 +382,7 @@ impl Explorer {
             outside_tiles: OutsideTiles::default(),
             lod: 0.0,
             reach: f64::INFINITY,
+            fovea: Fovea::NONE,
         })
     }
 
@@ -550,6 +562,12 @@ impl Explorer {
         let (w, h) = (self.cfg.width, self.cfg.height);
         let lod = frame.pixel_angle(h) * self.cfg.fidelity;
         self.lod = lod;
+        self.fovea = Fovea {
+            eye: o,
+            forward: frame.forward,
+            tan_half_fov: frame.tan_half_fov,
+            weight: self.cfg.fovea,
+        };
         let mut colour = vec![0u32; (w * h) as usize];
         let mut depth = vec![0f32; (w * h) as usize];
         let tree = &self.tree;
@@ -717,11 +735,13 @@ impl Explorer {
         (img, reqs, counts)
     }
 
-    /// Phase 2: subdivides requested leaves, largest first, within the time budget. Returns
+    /// Phase 2: subdivides requested leaves in [`RequestQueue`] order (largest on screen
+    /// first, nearer the centre counted larger) within the time budget. Returns
     /// (split, emptied, no-memory).
-    pub fn subdivide(&mut self, mut reqs: Vec<Request>, budget_ms: f64) -> [u64; 3] {
+    pub fn subdivide(&mut self, reqs: Vec<Request>, budget_ms: f64) -> [u64; 3] {
         let t0 = Instant::now();
-        self.pool.install(|| order_requests(&mut reqs));
+        let fovea = self.fovea;
+        let mut reqs = self.pool.install(|| RequestQueue::new(reqs, &fovea));
         let mut out = [0u64; 3];
         let mut next = 0;
 
@@ -762,7 +782,7 @@ impl Explorer {
             };
             let tb = Instant::now();
             let end = (next + size).min(reqs.len());
-            let chunk = &reqs[next..end];
+            let chunk = self.pool.install(|| reqs.take(next, end));
             let tree = &self.tree;
             let sh = &self.shader;
             let lod = self.lod;
@@ -786,7 +806,7 @@ impl Explorer {
             per_sub_ms = Some(tb.elapsed().as_secs_f64() * 1e3 / chunk.len() as f64);
             next = end;
         }
-        for r in &reqs[next..] {
+        for r in reqs.from(next) {
             self.tree.nodes[r.id as usize].clear_flags(REQUESTED);
         }
         if next < reqs.len() && self.tree.counts().nodes + 8 > self.tree.max_nodes {
@@ -910,28 +930,6 @@ impl Explorer {
     }
 }
 
-/// Sorts requests largest on screen first (side over the distance at which a ray reached the
-/// voxel; ties by node id, so the order does not depend on which ray claimed a leaf first
-/// beyond its distance). A zoom's frames then lose their biggest blocks first: the time budget
-/// goes to the voxels that spoil the picture most, not to the shallowest ones (a shallow voxel
-/// far away can be smaller on screen than a deep one in front of the eye).
-///
-/// Each footprint (a division) is computed once, not twice per comparison, and the sort runs
-/// on the caller's rayon pool: sorting 15-20 thousand requests a frame on one thread, with
-/// the other idle, was about 1 ms of a Menger zoom's frame. The order is the one
-/// `f64::total_cmp` gives (descending), then ids: keys are unique, so it does not depend on
-/// the sort.
-pub fn order_requests(reqs: &mut [Request]) {
-    reqs.par_sort_by_cached_key(|r| (std::cmp::Reverse(total_order(r.footprint())), r.id));
-}
-
-/// `f64::total_cmp` as a key: the bits with the sign's meaning folded in, as that function
-/// compares them.
-fn total_order(x: f64) -> i64 {
-    let bits = x.to_bits() as i64;
-    bits ^ ((((bits >> 63) as u64) >> 1) as i64)
-}
-
 /// A frame's unification unloads a brick once this many unifications in a row found it
 /// unvisited (16 frames at the default period of 4; see [`crate::evict::unify`]).
 pub const IDLE_UNIFICATIONS: u8 = 4;
@@ -1049,8 +1047,17 @@ fn refine_tile(
 /// zoom splits 312-341 leaves a frame, as it did at 7 (308-346), for 0.5-1.2 more frames a
 /// second (three interleaved pairs); kept at 7, the finer tree rendered 0.8-3.0 fps slower
 /// in four of five pairs. The Menger's splits cost what they did, so it splits a sixth fewer
-/// (641-678 against 769-796 on a 400-frame zoom to 1e6, SSIM 0.00-0.03 lower).
-pub const DEFAULT_SUBDIVIDE_MS: f64 = 6.0;
+/// (641-678 against 769-796 on a 400-frame zoom to 1e6, SSIM 0.00-0.03 lower). 6 until
+/// 2026-12-06 (stop 37), when requests began to be served nearer the screen's centre first
+/// ([`crate::request_order::Fovea`]) and no longer all sorted: at 3 ms with the fovea the
+/// 400-frame zooms to 1e6 come closer to the sphere tracer than at 6 ms without (median SSIM
+/// at frames 40-360: Mandelbulb 0.217 against 0.188, Menger 0.350 against 0.284) at a frame
+/// rate as high (27.9 against 25.2, 32.9 against 27.0); on the 1000-frame zooms to 1e15 the
+/// frame rates were within the machine's noise (four interleaved pairs each: Mandelbulb
+/// 34.5, 30.6, 30.0, 33.5 against 31.6, 31.0, 31.4, 30.9; Menger 33.9, 30.5, 33.5, 33.4
+/// against 34.6, 35.1, 32.3, 31.9). Kept at 6 ms, the fovea's finer centre rendered slower
+/// (Mandelbulb 25.4 fps, Menger 21.8).
+pub const DEFAULT_SUBDIVIDE_MS: f64 = 3.0;
 
 /// Default tile side of the start walks ([`ExplorerConfig::beam`]): with tiles of 16 the
 /// Mandelbulb zoom's render took 180 ms over three checkpoint frames against 234 ms for the
@@ -1154,62 +1161,6 @@ fn sky_colour(frame: &CameraFrame, d: DVec3, sky: ([f64; 3], [f64; 3])) -> u32 {
     pack_rgb(std::array::from_fn(|i| {
         sky.0[i] + (sky.1[i] - sky.0[i]) * k
     }))
-}
-
-#[cfg(test)]
-mod order_tests {
-    use super::*;
-
-    #[test]
-    fn the_request_order_is_total_cmp_then_id() {
-        // Footprints with ties, zeros of both signs, infinities (t = 0) and a NaN.
-        let b = |d: u8| (0..d).fold(BoxU::ROOT, |b, _| b.child(0));
-        let ts = [0.5, 0.0, -0.0, 1e-300, 2.0, 0.5, f64::NAN, 3.0, 1e300, 0.25];
-        let mut r: Vec<Request> = (0..200u32)
-            .map(|i| Request {
-                id: (i * 7919) % 1000,
-                b: b((i % 5) as u8),
-                t: ts[(i as usize * 31) % ts.len()],
-            })
-            .collect();
-        let mut want = r.clone();
-        want.sort_by(|a, b| {
-            b.footprint()
-                .total_cmp(&a.footprint())
-                .then(a.id.cmp(&b.id))
-        });
-        order_requests(&mut r);
-        let key = |q: &Request| (q.footprint().to_bits(), q.id);
-        assert_eq!(
-            r.iter().map(key).collect::<Vec<_>>(),
-            want.iter().map(key).collect::<Vec<_>>()
-        );
-    }
-
-    #[test]
-    fn requests_are_served_largest_on_screen_first() {
-        let b = |d: u8| (0..d).fold(BoxU::ROOT, |b, _| b.child(0));
-        // A deep voxel close to the eye is larger on screen than a shallow one far away.
-        let mut r = vec![
-            Request {
-                id: 1,
-                b: b(2),
-                t: 100.0,
-            },
-            Request {
-                id: 2,
-                b: b(6),
-                t: 0.001,
-            },
-            Request {
-                id: 3,
-                b: b(3),
-                t: 1.0,
-            },
-        ];
-        order_requests(&mut r);
-        assert_eq!(r.iter().map(|q| q.id).collect::<Vec<_>>(), [2, 3, 1]);
-    }
 }
 
 #[cfg(test)]

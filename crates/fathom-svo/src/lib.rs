@@ -17,6 +17,8 @@
 //! - [`check`]: the link-integrity checker;
 //! - [`outline`]: silhouette agreement with a sphere tracer, image similarity;
 //! - [`ray_grid`]: the pixel rays of a frame, set up a run of pixels at a time;
+//! - [`request_order`]: which requested leaves a frame splits first (largest on screen,
+//!   nearer the centre counted larger);
 //! - [`explorer`]: one frame = render (read-only) -> subdivide -> unify; stats;
 //! - [`precision`]: the guard that stops a zoom where the octree's arithmetic runs out
 //!   (depth 98, zoom ~1e28 at 640x480);
@@ -37,6 +39,7 @@ pub mod outline;
 pub mod plane;
 pub mod precision;
 pub mod ray_grid;
+pub mod request_order;
 pub mod root;
 pub mod stats;
 pub mod traverse;

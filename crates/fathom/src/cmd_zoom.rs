@@ -129,6 +129,13 @@ pub struct ZoomArgs {
     /// planes they pass).
     #[arg(long)]
     pub planes: bool,
+    /// Split voxels near the screen's centre first: a voxel's size on screen counts divided
+    /// by 1 + FOVEA rho^2, rho its distance from the centre in half-heights (1 at the top
+    /// edge). The zoom keeps the centre longest, so detail put there lasts (Mandelbulb to
+    /// 1e6 at 6 ms: median SSIM against the tracer 0.19 at 0, 0.26 at 4); 0 splits the
+    /// largest on screen first wherever they are, [0, 64].
+    #[arg(long, default_value_t = fathom_svo::request_order::DEFAULT_FOVEA)]
+    pub fovea: f64,
     /// Before the first frame, refine the octree at the first camera for up to this many
     /// milliseconds, so the zoom opens on the scene instead of a few huge voxels (not
     /// counted in the frame times; written to --stats as warmup_ms), [0, 600000].
@@ -235,6 +242,7 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
                 beam: a.beam,
                 beam_min: a.beam_min,
                 planes: a.planes,
+                fovea: a.fovea,
                 ..OctreeSettings::default()
             },
             ..RenderRequest::default()
@@ -433,6 +441,16 @@ mod tests {
         a.beam_min = 0;
         assert!(zoom(&a).err().unwrap().contains("beam-min"));
         a.beam_min = 4;
+        for bad in [-1.0, 65.0, f64::NAN, f64::INFINITY] {
+            a.fovea = bad;
+            let e = zoom(&a).err().unwrap();
+            assert!(e.contains("fovea") && e.contains("[0, 64]"), "{e}");
+        }
+        for good in [0.0, 64.0] {
+            a.fovea = good;
+            assert!(zoom(&a).is_ok(), "fovea {good}");
+        }
+        a.fovea = 4.0;
         a.max_memory = "1K".into();
         assert!(zoom(&a).err().unwrap().contains("max memory"));
     }
