@@ -38,8 +38,8 @@ fn tree_settings(cfg: &ExplorerConfig) -> ExplorerConfig {
 
 impl OctreeBackend {
     /// The explorer for `scene` (of shading generation `generation`) and `req`'s settings,
-    /// building a new one when either changed (other than the time budgets, which are set on
-    /// the explorer kept).
+    /// building a new one when either changed (other than the time budgets and the request
+    /// order's fovea, which are set on the explorer kept).
     pub fn get<'a>(
         slot: &'a mut Option<OctreeBackend>,
         scene: &Scene,
@@ -55,7 +55,8 @@ impl OctreeBackend {
             counters.octrees_built += 1;
             *slot = Some(OctreeBackend { explorer, key });
         }
-        // The kept explorer's settings differ at most in the budgets: take the new ones.
+        // The kept explorer's settings differ at most in the budgets and the fovea: take the
+        // new ones.
         let ob = slot.as_mut().expect("built above");
         ob.explorer.cfg = cfg;
         Ok(ob)

@@ -106,7 +106,7 @@ fn octree_regions_are_crops_too() {
 }
 
 #[test]
-fn a_new_time_budget_steps_the_same_octree_and_a_new_fidelity_rebuilds_it() {
+fn a_new_time_budget_or_fovea_steps_the_same_octree_and_a_new_fidelity_rebuilds_it() {
     let scene = presets::load("menger").unwrap();
     let cam = scene.camera.clone();
     let mut s = Session::new(scene).unwrap();
@@ -115,12 +115,19 @@ fn a_new_time_budget_steps_the_same_octree_and_a_new_fidelity_rebuilds_it() {
         ..request(40, 30)
     };
     s.step_octree(&cam, &req, false).unwrap();
-    req.octree.subdivide_ms = 3.0;
+    // Values other than the defaults, so that each one is seen to arrive.
+    assert_ne!(req.octree.subdivide_ms, 5.0);
+    assert_ne!(req.octree.fovea, 0.0);
+    req.octree.subdivide_ms = 5.0;
     req.octree.target_fps = 45.0;
+    req.octree.fovea = 0.0;
     s.step_octree(&cam, &req, false).unwrap();
     assert_eq!(s.counters().octrees_built, 1);
     let cfg = &s.octree().unwrap().cfg;
-    assert_eq!((cfg.subdivide_ms, cfg.target_fps), (3.0, 45.0));
+    assert_eq!(
+        (cfg.subdivide_ms, cfg.target_fps, cfg.fovea),
+        (5.0, 45.0, 0.0)
+    );
     req.octree.fidelity = 2.0;
     s.step_octree(&cam, &req, false).unwrap();
     assert_eq!(s.counters().octrees_built, 2);

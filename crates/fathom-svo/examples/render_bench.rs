@@ -3,7 +3,11 @@
 //! (min and median of repeated renders of the same frozen tree) and prints an image checksum.
 //!
 //! `cargo run --release -p fathom-svo --example render_bench -- mandelbulb 300 1e11 [threads]
-//! [neighbour|kdrestart] [beam tile side, 0 for none] [finest beam tile side]`
+//! [neighbour|kdrestart] [beam tile side, 0 for none] [finest beam tile side] [fovea]`
+//!
+//! The fovea (default `request_order::DEFAULT_FOVEA`) decides which leaves the fixed number of
+//! subdivisions splits: 0 builds the trees of the builds before stop 37, whose checksums
+//! `docs/svo.md` records.
 
 use fathom_core::camera_path::path_preset;
 use fathom_svo::RootSpec;
@@ -39,6 +43,10 @@ fn main() {
             .get(7)
             .and_then(|s| s.parse().ok())
             .unwrap_or(fathom_svo::explorer::DEFAULT_BEAM_MIN),
+        fovea: args
+            .get(8)
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(fathom_svo::request_order::DEFAULT_FOVEA),
         ..ExplorerConfig::default()
     };
     let mut ex = Explorer::new(&p.scene, cfg).unwrap();

@@ -566,6 +566,7 @@ impl Explorer {
             eye: o,
             forward: frame.forward,
             tan_half_fov: frame.tan_half_fov,
+            aspect: w as f64 / h as f64,
             weight: self.cfg.fovea,
         };
         let mut colour = vec![0u32; (w * h) as usize];
@@ -780,9 +781,11 @@ impl Explorer {
             } else {
                 batch
             };
-            let tb = Instant::now();
             let end = (next + size).min(reqs.len());
+            // Taken before the batch's clock starts: a sort past the first selection is not
+            // a split's time.
             let chunk = self.pool.install(|| reqs.take(next, end));
+            let tb = Instant::now();
             let tree = &self.tree;
             let sh = &self.shader;
             let lod = self.lod;

@@ -17,9 +17,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 /// The default [`Fovea::weight`]: on the Mandelbulb's 400-frame zoom to 1e6 (6 ms of splits a
-/// frame, frames 40-360), weights 1, 4, 16 and 64 gave a median similarity (SSIM) to the
-/// sphere tracer of 0.210, 0.247-0.249, 0.237 and 0.235 (0.179 without); on the Menger's, 1
-/// and 4 gave 0.306 and 0.323 (0.287 without).
+/// frame, frames 40-360, a build that still sorted every request), weights 1, 4, 16 and 64
+/// gave a median similarity (SSIM) to the sphere tracer of 0.210, 0.247-0.249, 0.237 and
+/// 0.235 (0.179 without); on the Menger's, 1 and 4 gave 0.306 and 0.323 (0.287 without).
 pub const DEFAULT_FOVEA: f64 = 4.0;
 
 /// Where the screen's centre is, to weight requests by their distance from it: a request's
@@ -34,6 +34,8 @@ pub struct Fovea {
     pub forward: DVec3,
     /// Tangent of half the vertical field of view.
     pub tan_half_fov: f64,
+    /// Width over height of the view: `rho` is at most the corner's, `sqrt(1 + aspect^2)`.
+    pub aspect: f64,
     /// How much nearer the centre counts: 0 serves the largest on screen first wherever they
     /// are; 4 counts a voxel at the top edge as a fifth of its size, [0, 64].
     pub weight: f64,
@@ -45,22 +47,24 @@ impl Fovea {
         eye: [0.0; 3],
         forward: DVec3::Z,
         tan_half_fov: 1.0,
+        aspect: 1.0,
         weight: 0.0,
     };
 
     /// The square of `rho`, the distance of `r`'s box centre from the screen's centre in
-    /// half-heights; 0 for a centre level with or behind the eye (a box the eye is so close to
-    /// covers the view's centre too).
+    /// half-heights, at most the corner's (a ray met the box, so it is on screen): 0 for a
+    /// box that reaches the plane of the eye (its centre within a half-diagonal of it, or
+    /// behind), which is so close that it covers much of the view, the centre included.
     pub fn rho2(&self, r: &Request) -> f64 {
         let h = 0.5 * r.b.dim();
         let v = DVec3::from_array(std::array::from_fn(|a| r.b.min[a] + h - self.eye[a]));
         let along = v.dot(self.forward);
-        if along.is_nan() || along <= 0.0 {
+        if along.is_nan() || along <= h * 3f64.sqrt() {
             return 0.0;
         }
         // tan^2 of the angle off the axis, without a square root: |v|^2 / along^2 - 1.
         let tan2 = (v.length_squared() / (along * along) - 1.0).max(0.0);
-        tan2 / (self.tan_half_fov * self.tan_half_fov)
+        (tan2 / (self.tan_half_fov * self.tan_half_fov)).min(1.0 + self.aspect * self.aspect)
     }
 
     /// The priority of `r`: its size on screen ([`Request::footprint`]) divided by
@@ -159,6 +163,7 @@ impl RequestQueue {
 
     /// The requests from position `start` of the serving order on, in no particular order.
     pub fn from(&self, start: usize) -> impl Iterator<Item = &Request> {
+        debug_assert!(start <= self.sorted || start >= self.order.len());
         self.order[start.min(self.order.len())..]
             .iter()
             .map(|&(_, _, i)| &self.reqs[i as usize])
@@ -301,6 +306,7 @@ mod tests {
         forward: DVec3::Z,
         // A 90-degree view: rho is the tangent of the angle off the axis.
         tan_half_fov: 1.0,
+        aspect: 4.0 / 3.0,
         weight: DEFAULT_FOVEA,
     };
 
@@ -317,12 +323,28 @@ mod tests {
             ..LOOK_Z
         };
         assert!((narrow.rho2(&off_axis(0, 2.0)) - 1.0).abs() < 1e-12);
-        // A box centre level with or behind the eye counts as central.
+        // Far off the axis, rho is held at the corner's (5/3 in a 4:3 view).
+        let got = LOOK_Z.rho2(&off_axis(0, 40.0));
+        assert!((got - 25.0 / 9.0).abs() < 1e-12, "rho^2 {got}");
+        // A box that reaches the plane of the eye counts as central: its centre level with
+        // the eye, within a half-diagonal in front of it (so far off the axis, the corner's
+        // rho if it did not), or behind.
         let mut beside = off_axis(0, 3.0);
-        beside.b.min[2] = -4.0 - 0.0625;
-        assert_eq!(LOOK_Z.rho2(&beside), 0.0);
-        beside.b.min[2] = -6.0;
-        assert_eq!(LOOK_Z.rho2(&beside), 0.0);
+        let s = beside.b.dim();
+        for centre_z in [-4.0, -4.0 + 0.8 * s, -6.0] {
+            beside.b.min[2] = centre_z - 0.5 * s;
+            assert_eq!(LOOK_Z.rho2(&beside), 0.0, "centre at z = {centre_z}");
+        }
+        beside.b.min[2] = -4.0 + 0.9 * s - 0.5 * s;
+        let got = LOOK_Z.rho2(&beside);
+        assert!(
+            (got - 25.0 / 9.0).abs() < 1e-12,
+            "just past the half-diagonal: {got}"
+        );
+        // A voxel the eye is at (t = 0, infinitely large on screen) comes first anywhere.
+        let mut at_eye = off_axis(0, 40.0);
+        at_eye.t = 0.0;
+        assert_eq!(LOOK_Z.priority(&at_eye), f64::INFINITY);
     }
 
     #[test]
