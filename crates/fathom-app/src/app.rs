@@ -93,6 +93,9 @@ pub struct ViewSettings {
     pub fidelity: f64,
     /// Octree leaves wider than a pixel drawn as surfaces instead of cubes (slower).
     pub planes: bool,
+    /// Octree voxels wider than two pixels drawn smooth (each pixel the mean of a box as wide
+    /// as its voxel) instead of as a mosaic of flat colours.
+    pub smooth: bool,
     /// Density grid, extinction, albedo and samples of the volume renderer (the scene as a
     /// cloud).
     pub volume: fathom_render::request::VolumeSettings,
@@ -119,6 +122,7 @@ impl ViewSettings {
         };
         r.octree.fidelity = self.fidelity;
         r.octree.planes = self.planes;
+        r.octree.smooth = self.smooth;
         r.volume = self.volume.clone();
         r
     }
@@ -281,6 +285,7 @@ impl ExplorerApp {
                 eye_separation: 0.065,
                 fidelity: 1.0,
                 planes: false,
+                smooth: true,
                 volume: Default::default(),
             },
             viewport: Viewport::new(opts.target_ms),
@@ -1084,6 +1089,12 @@ impl ExplorerApp {
                 "Draw voxels still wider than a pixel as the surface through them instead \
                      of as cubes: smoother while detail arrives, slower (rebuilds the tree)",
             );
+            ui.checkbox(&mut s.smooth, "smooth wide voxels")
+                .on_hover_text(
+                    "Blend the colours of voxels still wider than two pixels across their width \
+                     instead of drawing each flat: a soft picture instead of a mosaic while \
+                     detail arrives (keeps the tree; settled views look the same)",
+                );
         }
         if s.backend == Backend::Volume {
             let v = &mut s.volume;

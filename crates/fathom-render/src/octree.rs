@@ -1,8 +1,8 @@
 //! The octree backend of a session: one explorer, kept while the scene and the octree settings
 //! stay the same (so a still view settles once and a zoom or a window steps the same tree),
 //! rebuilt when either changes; the per-frame time budgets (`subdivide_ms`, `target_fps`) and
-//! the order requests are served in (`fovea`) are not part of the tree and change in place, so
-//! a window's frame-time slider keeps the tree.
+//! the order requests are served in (`fovea`) and whether wide voxels are drawn smooth are not
+//! part of the tree and change in place, so a window's frame-time slider keeps the tree.
 //! A still frame settles the tree at the view (subdividing until no leaf asks for more, within
 //! the request's frame limit) and renders it; a stepped frame renders the tree as it is and
 //! subdivides within a time budget. Frames go through the shared post effects; regions are
@@ -23,23 +23,24 @@ pub(crate) struct OctreeBackend {
     key: (u64, ExplorerConfig),
 }
 
-/// The settings that shape the tree: `cfg` with its per-frame time budgets and request order
-/// set to their defaults (they decide how much a frame refines and where first, not what the
-/// tree settles to).
+/// The settings that shape the tree: `cfg` with its per-frame time budgets, request order and
+/// smoothing set to their defaults (they decide how much a frame refines, where first and how
+/// wide voxels are drawn, not what the tree settles to).
 fn tree_settings(cfg: &ExplorerConfig) -> ExplorerConfig {
     let d = ExplorerConfig::default();
     ExplorerConfig {
         subdivide_ms: d.subdivide_ms,
         target_fps: d.target_fps,
         fovea: d.fovea,
+        smooth: d.smooth,
         ..cfg.clone()
     }
 }
 
 impl OctreeBackend {
     /// The explorer for `scene` (of shading generation `generation`) and `req`'s settings,
-    /// building a new one when either changed (other than the time budgets and the request
-    /// order's fovea, which are set on the explorer kept).
+    /// building a new one when either changed (other than the time budgets, the request
+    /// order's fovea and the smoothing, which are set on the explorer kept).
     pub fn get<'a>(
         slot: &'a mut Option<OctreeBackend>,
         scene: &Scene,
@@ -55,8 +56,8 @@ impl OctreeBackend {
             counters.octrees_built += 1;
             *slot = Some(OctreeBackend { explorer, key });
         }
-        // The kept explorer's settings differ at most in the budgets and the fovea: take the
-        // new ones.
+        // The kept explorer's settings differ at most in the budgets, the fovea and the
+        // smoothing: take the new ones.
         let ob = slot.as_mut().expect("built above");
         ob.explorer.cfg = cfg;
         Ok(ob)

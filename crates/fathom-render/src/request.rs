@@ -86,6 +86,9 @@ pub struct OctreeSettings {
     /// screen is divided by `1 + fovea rho^2`, `rho` its distance from the centre in
     /// half-heights (0: the largest on screen first wherever they are), [0, 64].
     pub fovea: f64,
+    /// Draw voxels wider than two pixels smooth, each pixel the mean colour of a box as wide
+    /// as its voxel on screen ([`fathom_svo::smooth`]; settled frames are unchanged).
+    pub smooth: bool,
 }
 
 impl Default for OctreeSettings {
@@ -104,6 +107,7 @@ impl Default for OctreeSettings {
             beam_min: fathom_svo::explorer::DEFAULT_BEAM_MIN,
             planes: false,
             fovea: fathom_svo::request_order::DEFAULT_FOVEA,
+            smooth: true,
         }
     }
 }
@@ -339,6 +343,7 @@ impl RenderRequest {
             beam_min: o.beam_min,
             planes: o.planes,
             fovea: o.fovea,
+            smooth: o.smooth,
             root: match o.root {
                 Some(c) => RootSpec::from_cube(Some(c)),
                 None => RootSpec::Fit { half: o.fit_half },

@@ -3,11 +3,14 @@
 //! (min and median of repeated renders of the same frozen tree) and prints an image checksum.
 //!
 //! `cargo run --release -p fathom-svo --example render_bench -- mandelbulb 300 1e11 [threads]
-//! [neighbour|kdrestart] [beam tile side, 0 for none] [finest beam tile side] [fovea]`
+//! [neighbour|kdrestart] [beam tile side, 0 for none] [finest beam tile side] [fovea]
+//! [smooth: 1 or 0]`
 //!
 //! The fovea (default `request_order::DEFAULT_FOVEA`) decides which leaves the fixed number of
 //! subdivisions splits: 0 builds the trees of the builds before stop 37, whose checksums
-//! `docs/svo.md` records.
+//! `docs/svo.md` records. Smoothing (default on, as in every front end; `crate::smooth`)
+//! changes the checksummed colours wherever a frame shows voxels wider than two pixels: 0
+//! gives the checksums of the builds before stop 38.
 
 use fathom_core::camera_path::path_preset;
 use fathom_svo::RootSpec;
@@ -47,6 +50,7 @@ fn main() {
             .get(8)
             .and_then(|s| s.parse().ok())
             .unwrap_or(fathom_svo::request_order::DEFAULT_FOVEA),
+        smooth: args.get(9).is_none_or(|s| s != "0"),
         ..ExplorerConfig::default()
     };
     let mut ex = Explorer::new(&p.scene, cfg).unwrap();

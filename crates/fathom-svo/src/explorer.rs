@@ -24,6 +24,7 @@ use crate::octree::{Anchor, BoxU, Octree, dim_at};
 use crate::ray_grid::{RayGrid, RaySpan};
 use crate::request_order::{DEFAULT_FOVEA, Fovea, RequestQueue};
 use crate::root::RootSpec;
+use crate::smooth::{self, Smoother};
 use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
 use fathom_core::dd::Dd;
 use fathom_core::scene::Scene;
@@ -95,6 +96,10 @@ pub struct ExplorerConfig {
     /// is divided by `1 + fovea rho^2`, `rho` its distance from the centre in half-heights
     /// ([`Fovea`]; 0: the largest on screen first wherever they are), [0, 64].
     pub fovea: f64,
+    /// Draw voxels wider than two pixels smooth: each such pixel takes the mean colour of a
+    /// box as wide as its voxel on screen ([`crate::smooth`]), so a zoom's coarse frames show
+    /// the leaves' colours joined smoothly instead of a mosaic. Settled frames are unchanged.
+    pub smooth: bool,
 }
 
 impl Default for ExplorerConfig {
@@ -122,6 +127,7 @@ impl Default for ExplorerConfig {
             beam_min: DEFAULT_BEAM_MIN,
             planes: false,
             fovea: DEFAULT_FOVEA,
+            smooth: true,
         }
     }
 }
@@ -342,6 +348,8 @@ pub struct Explorer {
     reach: f64,
     /// The last render's view, by which the next subdivision orders its requests.
     fovea: Fovea,
+    /// Draws wide voxels smooth (`cfg.smooth`), its table kept between frames.
+    smoother: Smoother,
 }
 
 impl Explorer {
@@ -383,6 +391,7 @@ impl Explorer {
             lod: 0.0,
             reach: f64::INFINITY,
             fovea: Fovea::NONE,
+            smoother: Smoother::default(),
         })
     }
 
@@ -571,6 +580,8 @@ impl Explorer {
         };
         let mut colour = vec![0u32; (w * h) as usize];
         let mut depth = vec![0f32; (w * h) as usize];
+        // Each pixel's box half-width for `smooth::smooth_wide_voxels` (0: keep the pixel).
+        let mut half = vec![0u8; (w * h) as usize];
         let tree = &self.tree;
         let skip = self.skip;
         let trav = self.cfg.traversal;
@@ -590,6 +601,7 @@ impl Explorer {
                    hit: Hit,
                    crow: &mut [u32],
                    drow: &mut [f32],
+                   hrow: &mut [u8],
                    c: &mut [u64; 5],
                    largest: &mut f64| {
             c[0] += 1;
@@ -599,6 +611,9 @@ impl Explorer {
                 let side = dim_at(hit.depth);
                 if side > *largest * hit.t {
                     *largest = side / hit.t;
+                }
+                if side >= 2.0 * pa * hit.t {
+                    hrow[x] = smooth::half_width(side / (hit.t * pa));
                 }
                 crow[x] = hit.colour;
                 drow[x] = (hit.t * size) as f32;
@@ -640,8 +655,9 @@ impl Explorer {
                 colour
                     .par_chunks_mut(band)
                     .zip(depth.par_chunks_mut(band))
+                    .zip(half.par_chunks_mut(band))
                     .enumerate()
-                    .map(|(k, (cband, dband))| {
+                    .map(|(k, ((cband, dband), hband))| {
                         let mut reqs = Vec::new();
                         let mut c = [0u64; 5];
                         let mut largest = 0f64;
@@ -680,6 +696,7 @@ impl Explorer {
                                 let y = y0 + j;
                                 let crow = &mut cband[j * wu..(j + 1) * wu];
                                 let drow = &mut dband[j * wu..(j + 1) * wu];
+                                let hrow = &mut hband[j * wu..(j + 1) * wu];
                                 grid.segment(y, x0, n, o, lod, &mut span, |x, d, r| {
                                     let hit = starts
                                         .at(x, y)
@@ -688,7 +705,7 @@ impl Explorer {
                                             c[4] += 1;
                                             cast_neighbour(tree, r, skip, &mut entry, &mut reqs)
                                         });
-                                    put(x, d, hit, crow, drow, &mut c, &mut largest);
+                                    put(x, d, hit, crow, drow, hrow, &mut c, &mut largest);
                                 });
                             }
                         }
@@ -699,8 +716,9 @@ impl Explorer {
                 colour
                     .par_chunks_mut(w as usize)
                     .zip(depth.par_chunks_mut(w as usize))
+                    .zip(half.par_chunks_mut(w as usize))
                     .enumerate()
-                    .map(|(y, (crow, drow))| {
+                    .map(|(y, ((crow, drow), hrow))| {
                         let mut reqs = Vec::new();
                         let mut c = [0u64; 5];
                         let mut largest = 0f64;
@@ -709,7 +727,7 @@ impl Explorer {
                         let mut span = RaySpan::default();
                         grid.row(y, o, lod, &mut span, |x, d, r| {
                             let hit = cast(tree, r, skip, &mut entry, trav, &mut reqs);
-                            put(x, d, hit, crow, drow, &mut c, &mut largest);
+                            put(x, d, hit, crow, drow, hrow, &mut c, &mut largest);
                         });
                         (reqs, c, largest)
                     })
@@ -725,6 +743,12 @@ impl Explorer {
             self.outside_tiles.record(beams, cost);
         }
         self.reach = median_hit(&depth, size);
+        if self.cfg.smooth && largest >= 2.0 * pa {
+            self.pool.install(|| {
+                self.smoother
+                    .smooth(&mut colour, &half, w as usize, h as usize);
+            });
+        }
         let counts = [counts[0], counts[1], counts[2]];
         let img = SvoImage {
             width: w,

@@ -41,6 +41,7 @@ pub mod precision;
 pub mod ray_grid;
 pub mod request_order;
 pub mod root;
+pub mod smooth;
 pub mod stats;
 pub mod traverse;
 

@@ -136,6 +136,12 @@ pub struct ZoomArgs {
     /// largest on screen first wherever they are, [0, 64].
     #[arg(long, default_value_t = fathom_svo::request_order::DEFAULT_FOVEA)]
     pub fovea: f64,
+    /// Draw voxels wider than two pixels as they are stored, one flat colour each (a mosaic
+    /// while detail arrives), instead of smooth: by default each such pixel takes the mean
+    /// colour of a box as wide as its voxel on screen, which joins the voxels' colours
+    /// smoothly. Settled frames look the same either way.
+    #[arg(long)]
+    pub blocky: bool,
     /// Before the first frame, refine the octree at the first camera for up to this many
     /// milliseconds, so the zoom opens on the scene instead of a few huge voxels (not
     /// counted in the frame times; written to --stats as warmup_ms), [0, 600000].
@@ -243,6 +249,7 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
                 beam_min: a.beam_min,
                 planes: a.planes,
                 fovea: a.fovea,
+                smooth: !a.blocky,
                 ..OctreeSettings::default()
             },
             ..RenderRequest::default()
