@@ -93,7 +93,7 @@ pub struct ViewSettings {
     pub fidelity: f64,
     /// Octree leaves wider than a pixel drawn as surfaces instead of cubes (slower).
     pub planes: bool,
-    /// Octree voxels wider than two pixels drawn smooth (each pixel the mean of a box as wide
+    /// Octree voxels at least two pixels wide drawn smooth (each pixel the mean of a box as wide
     /// as its voxel) instead of as a mosaic of flat colours.
     pub smooth: bool,
     /// Density grid, extinction, albedo and samples of the volume renderer (the scene as a
@@ -1091,9 +1091,10 @@ impl ExplorerApp {
             );
             ui.checkbox(&mut s.smooth, "smooth wide voxels")
                 .on_hover_text(
-                    "Blend the colours of voxels still wider than two pixels across their width \
+                    "Blend the colours of voxels two or more pixels wide across their width \
                      instead of drawing each flat: a soft picture instead of a mosaic while \
-                     detail arrives (keeps the tree; settled views look the same)",
+                     detail arrives (keeps the tree; views settled to voxels under two \
+                     pixels look the same)",
                 );
         }
         if s.backend == Backend::Volume {

@@ -77,7 +77,7 @@ impl OctreeBackend {
             if control.cancelled() {
                 return Err(crate::RenderError::Cancelled);
             }
-            let (_, reqs, _) = self.explorer.render(camera);
+            let (reqs, _) = self.explorer.probe(camera);
             if reqs.is_empty() {
                 break;
             }

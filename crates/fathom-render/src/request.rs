@@ -86,8 +86,9 @@ pub struct OctreeSettings {
     /// screen is divided by `1 + fovea rho^2`, `rho` its distance from the centre in
     /// half-heights (0: the largest on screen first wherever they are), [0, 64].
     pub fovea: f64,
-    /// Draw voxels wider than two pixels smooth, each pixel the mean colour of a box as wide
-    /// as its voxel on screen ([`fathom_svo::smooth`]; settled frames are unchanged).
+    /// Draw voxels at least two pixels wide smooth, each pixel the mean colour of a box as
+    /// wide as its voxel on screen ([`fathom_svo::smooth`]; frames whose voxels are all
+    /// narrower, settled frames at fidelity below 2, are unchanged).
     pub smooth: bool,
 }
 

@@ -96,9 +96,10 @@ pub struct ExplorerConfig {
     /// is divided by `1 + fovea rho^2`, `rho` its distance from the centre in half-heights
     /// ([`Fovea`]; 0: the largest on screen first wherever they are), [0, 64].
     pub fovea: f64,
-    /// Draw voxels wider than two pixels smooth: each such pixel takes the mean colour of a
-    /// box as wide as its voxel on screen ([`crate::smooth`]), so a zoom's coarse frames show
-    /// the leaves' colours joined smoothly instead of a mosaic. Settled frames are unchanged.
+    /// Draw voxels at least two pixels wide smooth: each such pixel takes the mean colour of
+    /// a box as wide as its voxel on screen ([`crate::smooth`]), so a zoom's coarse frames
+    /// show the leaves' colours joined smoothly instead of a mosaic. Frames whose voxels are
+    /// all narrower (settled frames at fidelity below 2) are unchanged.
     pub smooth: bool,
 }
 
@@ -536,6 +537,28 @@ impl Explorer {
         cam: &Camera,
         deep: &DeepEye,
     ) -> (SvoImage, Vec<Request>, [u64; 3]) {
+        self.render_frame(cam, deep, self.cfg.smooth)
+    }
+
+    /// [`Explorer::render_deep`] for a caller that needs only the requests and counts (the
+    /// settling loops): the image is dropped, so it is not drawn smooth.
+    pub fn probe_deep(&mut self, cam: &Camera, deep: &DeepEye) -> (Vec<Request>, [u64; 3]) {
+        let (_, reqs, counts) = self.render_frame(cam, deep, false);
+        (reqs, counts)
+    }
+
+    /// [`Explorer::probe_deep`] for an f64 eye.
+    pub fn probe(&mut self, cam: &Camera) -> (Vec<Request>, [u64; 3]) {
+        self.probe_deep(cam, &DeepEye::of(cam))
+    }
+
+    /// The render, its wide voxels drawn smooth when `smooth` ([`crate::smooth`]).
+    fn render_frame(
+        &mut self,
+        cam: &Camera,
+        deep: &DeepEye,
+        smooth: bool,
+    ) -> (SvoImage, Vec<Request>, [u64; 3]) {
         let frame = cam.frame();
         let scale = deep.scale.max(1e-300);
         let eye_u = self.eye_root_units(cam.eye, deep.eye_lo);
@@ -580,7 +603,7 @@ impl Explorer {
         };
         let mut colour = vec![0u32; (w * h) as usize];
         let mut depth = vec![0f32; (w * h) as usize];
-        // Each pixel's box half-width for `smooth::smooth_wide_voxels` (0: keep the pixel).
+        // Each pixel's box half-width for `Smoother::smooth` (0: keep the pixel).
         let mut half = vec![0u8; (w * h) as usize];
         let tree = &self.tree;
         let skip = self.skip;
@@ -743,7 +766,7 @@ impl Explorer {
             self.outside_tiles.record(beams, cost);
         }
         self.reach = median_hit(&depth, size);
-        if self.cfg.smooth && largest >= 2.0 * pa {
+        if smooth && largest >= 2.0 * pa {
             self.pool.install(|| {
                 self.smoother
                     .smooth(&mut colour, &half, w as usize, h as usize);
@@ -941,7 +964,7 @@ impl Explorer {
             if left <= 0.0 {
                 return i;
             }
-            let (_, reqs, _) = self.render_deep(cam, deep);
+            let (reqs, _) = self.probe_deep(cam, deep);
             if reqs.is_empty() {
                 return i;
             }

@@ -136,10 +136,11 @@ pub struct ZoomArgs {
     /// largest on screen first wherever they are, [0, 64].
     #[arg(long, default_value_t = fathom_svo::request_order::DEFAULT_FOVEA)]
     pub fovea: f64,
-    /// Draw voxels wider than two pixels as they are stored, one flat colour each (a mosaic
-    /// while detail arrives), instead of smooth: by default each such pixel takes the mean
-    /// colour of a box as wide as its voxel on screen, which joins the voxels' colours
-    /// smoothly. Settled frames look the same either way.
+    /// Draw voxels at least two pixels wide as they are stored, one flat colour each (a
+    /// mosaic while detail arrives), instead of smooth: by default each such pixel takes the
+    /// mean colour of a box as wide as its voxel on screen, which joins the voxels' colours
+    /// smoothly (Menger to 1e6: median SSIM against the tracer 0.34 blocky, 0.42 smooth).
+    /// Frames whose voxels are all narrower look the same either way.
     #[arg(long)]
     pub blocky: bool,
     /// Before the first frame, refine the octree at the first camera for up to this many
