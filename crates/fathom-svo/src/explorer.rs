@@ -4,7 +4,7 @@
 //! construction) while both cores stay busy in each phase:
 //! 1. **render** (parallel over rows, the tree shared read-only; rays only write neighbour-link
 //!    improvements, visited flags and subdivision requests, all atomics that never change what
-//!    a ray sees);
+//!    a ray sees), then voxels two or more pixels wide drawn smooth ([`crate::smooth`]);
 //! 2. **subdivide** (the requested leaves, largest first, their 8 children evaluated in
 //!    parallel within a time budget, then linked in on one thread; all-empty children recombine
 //!    upward);
