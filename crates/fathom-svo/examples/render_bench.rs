@@ -9,7 +9,7 @@
 //! The fovea (default `request_order::DEFAULT_FOVEA`) decides which leaves the fixed number of
 //! subdivisions splits: 0 builds the trees of the builds before stop 37, whose checksums
 //! `docs/svo.md` records. Smoothing (default on, as in every front end; `crate::smooth`)
-//! changes the checksummed colours wherever a frame shows voxels wider than two pixels: 0
+//! changes the checksummed colours wherever a frame shows voxels two or more pixels wide: 0
 //! gives the checksums of the builds before stop 38.
 
 use fathom_core::camera_path::path_preset;
