@@ -617,6 +617,13 @@ impl Explorer {
         // Tile starts serve the neighbour traversal; from outside the root, while they pay.
         let tiling = beam > 0 && trav == Traversal::Neighbour;
         let beams = tiling && (skip.is_some() || self.outside_tiles.allows());
+        // A hit's voxel is smoothed when its side over its distance reaches this (never when
+        // the image is not smoothed: no box widths are worked out).
+        let wide = if smooth {
+            smooth::MIN_WIDE_PX * pa
+        } else {
+            f64::INFINITY
+        };
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
         // largest side over distance, compared by cross-multiplying: no division per pixel).
         let put = |x: usize,
@@ -635,7 +642,7 @@ impl Explorer {
                 if side > *largest * hit.t {
                     *largest = side / hit.t;
                 }
-                if side >= 2.0 * pa * hit.t {
+                if side >= wide * hit.t {
                     hrow[x] = smooth::half_width(side / (hit.t * pa));
                 }
                 crow[x] = hit.colour;
@@ -766,7 +773,7 @@ impl Explorer {
             self.outside_tiles.record(beams, cost);
         }
         self.reach = median_hit(&depth, size);
-        if smooth && largest >= 2.0 * pa {
+        if largest >= wide {
             self.pool.install(|| {
                 self.smoother
                     .smooth(&mut colour, &half, w as usize, h as usize);

@@ -21,12 +21,15 @@ use rayon::prelude::*;
 /// pixels, else `px / 2` rounded down, so the box is `2 r + 1` wide, within a pixel of the
 /// voxel's width; at most [`MAX_HALF_WIDTH`].
 pub fn half_width(px: f64) -> u8 {
-    if px < 2.0 {
+    if px < MIN_WIDE_PX {
         0
     } else {
         (px * 0.5).min(MAX_HALF_WIDTH as f64) as u8
     }
 }
+
+/// How wide on screen, in pixels, a voxel must be to be smoothed.
+pub const MIN_WIDE_PX: f64 = 2.0;
 
 /// The widest box's half-width in pixels: voxels wider than 511 pixels are smoothed as if they
 /// were that wide (on a 640x480 frame only the first frames of a cold start show such voxels).
