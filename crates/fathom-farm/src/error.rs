@@ -46,6 +46,16 @@ pub enum FarmError {
         crate::manifest::MANIFEST
     )]
     NotAFarm { dir: PathBuf },
+    /// A manifest written by an earlier build of fathom whose job description lacked
+    /// settings this build has: its job id cannot be checked, and this build could render
+    /// its units differently, so the job is not resumed.
+    #[error(
+        "{} was written by an earlier build of fathom, whose render settings lacked {}; this \
+         build cannot resume that job (its pixels could differ): render into a new directory",
+        path.display(),
+        missing.join(", ")
+    )]
+    Outdated { path: PathBuf, missing: Vec<String> },
     /// A manifest, receipt or scene file that does not parse.
     #[error("{} is damaged: {why}", path.display())]
     Damaged { path: PathBuf, why: String },

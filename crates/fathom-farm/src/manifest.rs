@@ -73,6 +73,31 @@ impl Fingerprint {
     }
 }
 
+/// The fields (dotted paths) that `fingerprint` serialises and the stored JSON `stored`
+/// lacks: settings added to fathom after the manifest was written.
+fn missing_fields(stored: &serde_json::Value, fingerprint: &Fingerprint) -> Vec<String> {
+    fn walk(stored: &serde_json::Value, ours: &serde_json::Value, at: &str, out: &mut Vec<String>) {
+        let (Some(s), Some(o)) = (stored.as_object(), ours.as_object()) else {
+            return;
+        };
+        for (k, v) in o {
+            let path = if at.is_empty() {
+                k.clone()
+            } else {
+                format!("{at}.{k}")
+            };
+            match s.get(k) {
+                Some(sv) => walk(sv, v, &path, out),
+                None => out.push(path),
+            }
+        }
+    }
+    let ours = serde_json::to_value(fingerprint).expect("a fingerprint serialises");
+    let mut out = Vec::new();
+    walk(stored, &ours, "", &mut out);
+    out
+}
+
 /// `DIR/farm.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -221,8 +246,8 @@ impl FarmDir {
         if !path.exists() {
             return Err(FarmError::NotAFarm { dir: dir.into() });
         }
-        let manifest: Manifest =
-            serde_json::from_slice(&read(&path)?).map_err(|e| damaged(&path, e))?;
+        let bytes = read(&path)?;
+        let manifest: Manifest = serde_json::from_slice(&bytes).map_err(|e| damaged(&path, e))?;
         if manifest.format != FORMAT {
             return Err(damaged(
                 &path,
@@ -230,6 +255,14 @@ impl FarmDir {
             ));
         }
         if manifest.job != manifest.fingerprint.id() {
+            // Read with this build's defaults, a manifest from a build whose settings had
+            // fewer fields fingerprints differently: say so rather than "damaged".
+            let missing = serde_json::from_slice::<serde_json::Value>(&bytes)
+                .map(|v| missing_fields(&v["fingerprint"], &manifest.fingerprint))
+                .unwrap_or_default();
+            if !missing.is_empty() {
+                return Err(FarmError::Outdated { path, missing });
+            }
             return Err(damaged(&path, "its job id does not match its fingerprint"));
         }
         if manifest.units != manifest.fingerprint.work.units(manifest.output) {

@@ -38,6 +38,17 @@ fn small_request() -> RenderRequest {
     }
 }
 
+/// The fingerprint of `fake_job(_, "scene A", 4)`.
+fn fake_fingerprint() -> Fingerprint {
+    let req = small_request();
+    Fingerprint::new(
+        "scene A",
+        &req,
+        Work::tiles(4, req.width, req.height).unwrap(),
+    )
+    .unwrap()
+}
+
 fn fake_job(dir: &Path, scene: &str, tiles: usize) -> Result<FarmDir, FarmError> {
     let req = small_request();
     let work = Work::tiles(tiles, req.width, req.height)?;
@@ -170,6 +181,51 @@ fn a_directory_of_a_different_job_is_refused() {
     ));
     std::fs::remove_dir_all(&dir).ok();
     std::fs::remove_dir_all(&other).ok();
+}
+
+#[test]
+fn a_job_written_before_settings_were_added_is_refused_naming_them_not_called_damaged() {
+    let dir = scratch("outdated");
+    fake_job(&dir, "scene A", 4).unwrap();
+    let path = dir.join(crate::manifest::MANIFEST);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    // As an earlier build wrote it: its octree settings had no `smooth` and no `fovea`.
+    let octree = v["fingerprint"]["request"]["octree"]
+        .as_object_mut()
+        .unwrap();
+    assert!(octree.remove("smooth").is_some() && octree.remove("fovea").is_some());
+    // ... and its job id was the hash of its fingerprint without them.
+    let compact = serde_json::to_string(&fake_fingerprint()).unwrap();
+    let earlier = compact.replace(r#","fovea":4.0,"smooth":true"#, "");
+    assert_ne!(earlier, compact);
+    v["job"] = crate::manifest::sha256_hex(earlier.as_bytes())[..16].into();
+    std::fs::write(&path, serde_json::to_vec_pretty(&v).unwrap()).unwrap();
+    let e = FarmDir::open(&dir).unwrap_err();
+    let FarmError::Outdated { ref missing, .. } = e else {
+        panic!("{e}");
+    };
+    let mut missing = missing.clone();
+    missing.sort();
+    assert_eq!(missing, ["request.octree.fovea", "request.octree.smooth"]);
+    assert!(e.to_string().contains("new directory"), "{e}");
+    // Creating the same job there is refused the same way, and the directory is kept.
+    assert!(matches!(
+        fake_job(&dir, "scene A", 4),
+        Err(FarmError::Outdated { .. })
+    ));
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        serde_json::to_string_pretty(&v).unwrap()
+    );
+    // A job id edited by hand, with every field present, is still damaged.
+    v["fingerprint"]["request"]["octree"]["smooth"] = true.into();
+    v["fingerprint"]["request"]["octree"]["fovea"] = 4.0.into();
+    v["job"] = "0123456789abcdef".into();
+    std::fs::write(&path, serde_json::to_vec_pretty(&v).unwrap()).unwrap();
+    let e = FarmDir::open(&dir).unwrap_err();
+    assert!(matches!(e, FarmError::Damaged { .. }), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
