@@ -46,12 +46,14 @@ pub enum FarmError {
         crate::manifest::MANIFEST
     )]
     NotAFarm { dir: PathBuf },
-    /// A manifest written by an earlier build of fathom whose job description lacked
-    /// settings this build has: its job id cannot be checked, and this build could render
-    /// its units differently, so the job is not resumed.
+    /// A manifest written by an earlier build of fathom whose render settings lacked
+    /// fields this build has (its job id is the hash of its fingerprint without them): this
+    /// build would fill them with defaults and could render its units differently, so the job
+    /// is not resumed.
     #[error(
         "{} was written by an earlier build of fathom, whose render settings lacked {}; this \
-         build cannot resume that job (its pixels could differ): render into a new directory",
+         build cannot resume that job (its pixels could differ): use a new directory, or \
+         delete it to start over",
         path.display(),
         missing.join(", ")
     )]

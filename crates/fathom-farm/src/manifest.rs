@@ -74,7 +74,8 @@ impl Fingerprint {
 }
 
 /// The fields (dotted paths) that `fingerprint` serialises and the stored JSON `stored`
-/// lacks: settings added to fathom after the manifest was written.
+/// lacks: settings added to fathom after the manifest was written (objects are compared
+/// field by field; lists are not walked: the fingerprint holds none that could gain one).
 fn missing_fields(stored: &serde_json::Value, fingerprint: &Fingerprint) -> Vec<String> {
     fn walk(stored: &serde_json::Value, ours: &serde_json::Value, at: &str, out: &mut Vec<String>) {
         let (Some(s), Some(o)) = (stored.as_object(), ours.as_object()) else {
@@ -96,6 +97,28 @@ fn missing_fields(stored: &serde_json::Value, fingerprint: &Fingerprint) -> Vec<
     let mut out = Vec::new();
     walk(stored, &ours, "", &mut out);
     out
+}
+
+/// The job id a build without the scalar fields `missing` (dotted paths) would have given
+/// `fingerprint`: its compact JSON with each `,"field":value` left out. `None` when a field
+/// cannot be left out that way (an object or list, or the first field of its object). Only a
+/// hash that equals the stored job id shows the manifest is an earlier build's, untouched.
+fn earlier_id(fingerprint: &Fingerprint, missing: &[String]) -> Option<String> {
+    let ours = serde_json::to_value(fingerprint).ok()?;
+    let mut json = serde_json::to_string(fingerprint).ok()?;
+    for path in missing {
+        let v = path.split('.').try_fold(&ours, |v, k| v.get(k))?;
+        if v.is_object() || v.is_array() {
+            return None;
+        }
+        let key = path.rsplit('.').next()?;
+        let field = format!(",\"{key}\":{}", serde_json::to_string(v).ok()?);
+        if !json.contains(&field) {
+            return None;
+        }
+        json = json.replacen(&field, "", 1);
+    }
+    Some(sha256_hex(json.as_bytes())[..16].into())
 }
 
 /// `DIR/farm.json`.
@@ -260,7 +283,13 @@ impl FarmDir {
             let missing = serde_json::from_slice::<serde_json::Value>(&bytes)
                 .map(|v| missing_fields(&v["fingerprint"], &manifest.fingerprint))
                 .unwrap_or_default();
-            if !missing.is_empty() {
+            if !missing.is_empty()
+                && earlier_id(&manifest.fingerprint, &missing).as_ref() == Some(&manifest.job)
+            {
+                let missing = missing
+                    .iter()
+                    .map(|m| m.strip_prefix("request.").unwrap_or(m).to_string())
+                    .collect();
                 return Err(FarmError::Outdated { path, missing });
             }
             return Err(damaged(&path, "its job id does not match its fingerprint"));

@@ -207,7 +207,7 @@ fn a_job_written_before_settings_were_added_is_refused_naming_them_not_called_da
     };
     let mut missing = missing.clone();
     missing.sort();
-    assert_eq!(missing, ["request.octree.fovea", "request.octree.smooth"]);
+    assert_eq!(missing, ["octree.fovea", "octree.smooth"]);
     assert!(e.to_string().contains("new directory"), "{e}");
     // Creating the same job there is refused the same way, and the directory is kept.
     assert!(matches!(
@@ -218,6 +218,21 @@ fn a_job_written_before_settings_were_added_is_refused_naming_them_not_called_da
         std::fs::read_to_string(&path).unwrap(),
         serde_json::to_string_pretty(&v).unwrap()
     );
+    // Fields deleted by hand (the job id is not the hash without them): damaged.
+    let good = v["job"].clone();
+    v["job"] = "0123456789abcdef".into();
+    std::fs::write(&path, serde_json::to_vec_pretty(&v).unwrap()).unwrap();
+    let e = FarmDir::open(&dir).unwrap_err();
+    assert!(matches!(e, FarmError::Damaged { .. }), "{e}");
+    v["job"] = good;
+    v["fingerprint"]["request"]
+        .as_object_mut()
+        .unwrap()
+        .remove("width");
+    std::fs::write(&path, serde_json::to_vec_pretty(&v).unwrap()).unwrap();
+    let e = FarmDir::open(&dir).unwrap_err();
+    assert!(matches!(e, FarmError::Damaged { .. }), "{e}");
+    v["fingerprint"]["request"]["width"] = 64.into();
     // A job id edited by hand, with every field present, is still damaged.
     v["fingerprint"]["request"]["octree"]["smooth"] = true.into();
     v["fingerprint"]["request"]["octree"]["fovea"] = 4.0.into();
