@@ -68,15 +68,19 @@ impl Fingerprint {
 
     /// The job id: the first 16 hex digits of the SHA-256 of the fingerprint's JSON.
     pub fn id(&self) -> String {
-        let json = serde_json::to_string(self).expect("a fingerprint serialises");
-        sha256_hex(json.as_bytes())[..16].into()
+        job_id(&serde_json::to_string(self).expect("a fingerprint serialises"))
     }
 }
 
-/// The fields (dotted paths) that `fingerprint` serialises and the stored JSON `stored`
-/// lacks: settings added to fathom after the manifest was written (objects are compared
+/// The job id of a fingerprint's compact JSON: its SHA-256's first 16 hex digits.
+fn job_id(json: &str) -> String {
+    sha256_hex(json.as_bytes())[..16].into()
+}
+
+/// The fields (dotted paths) that `ours` (this build's fingerprint as JSON) has and the
+/// stored JSON `stored` lacks: settings added to fathom after the manifest was written (objects are compared
 /// field by field; lists are not walked: the fingerprint holds none that could gain one).
-fn missing_fields(stored: &serde_json::Value, fingerprint: &Fingerprint) -> Vec<String> {
+fn missing_fields(stored: &serde_json::Value, ours: &serde_json::Value) -> Vec<String> {
     fn walk(stored: &serde_json::Value, ours: &serde_json::Value, at: &str, out: &mut Vec<String>) {
         let (Some(s), Some(o)) = (stored.as_object(), ours.as_object()) else {
             return;
@@ -93,21 +97,23 @@ fn missing_fields(stored: &serde_json::Value, fingerprint: &Fingerprint) -> Vec<
             }
         }
     }
-    let ours = serde_json::to_value(fingerprint).expect("a fingerprint serialises");
     let mut out = Vec::new();
-    walk(stored, &ours, "", &mut out);
+    walk(stored, ours, "", &mut out);
     out
 }
 
 /// The job id a build without the scalar fields `missing` (dotted paths) would have given
-/// `fingerprint`: its compact JSON with each `,"field":value` left out. `None` when a field
+/// `fingerprint` (`ours` as JSON): its compact JSON with each `,"field":value` left out. `None` when a field
 /// cannot be left out that way (an object or list, or the first field of its object). Only a
 /// hash that equals the stored job id shows the manifest is an earlier build's, untouched.
-fn earlier_id(fingerprint: &Fingerprint, missing: &[String]) -> Option<String> {
-    let ours = serde_json::to_value(fingerprint).ok()?;
+fn earlier_id(
+    fingerprint: &Fingerprint,
+    ours: &serde_json::Value,
+    missing: &[String],
+) -> Option<String> {
     let mut json = serde_json::to_string(fingerprint).ok()?;
     for path in missing {
-        let v = path.split('.').try_fold(&ours, |v, k| v.get(k))?;
+        let v = path.split('.').try_fold(ours, |v, k| v.get(k))?;
         if v.is_object() || v.is_array() {
             return None;
         }
@@ -118,7 +124,7 @@ fn earlier_id(fingerprint: &Fingerprint, missing: &[String]) -> Option<String> {
         }
         json = json.replacen(&field, "", 1);
     }
-    Some(sha256_hex(json.as_bytes())[..16].into())
+    Some(job_id(&json))
 }
 
 /// `DIR/farm.json`.
@@ -280,11 +286,13 @@ impl FarmDir {
         if manifest.job != manifest.fingerprint.id() {
             // Read with this build's defaults, a manifest from a build whose settings had
             // fewer fields fingerprints differently: say so rather than "damaged".
+            let ours = serde_json::to_value(&manifest.fingerprint).expect("it serialises");
             let missing = serde_json::from_slice::<serde_json::Value>(&bytes)
-                .map(|v| missing_fields(&v["fingerprint"], &manifest.fingerprint))
+                .map(|v| missing_fields(&v["fingerprint"], &ours))
                 .unwrap_or_default();
             if !missing.is_empty()
-                && earlier_id(&manifest.fingerprint, &missing).as_ref() == Some(&manifest.job)
+                && earlier_id(&manifest.fingerprint, &ours, &missing).as_ref()
+                    == Some(&manifest.job)
             {
                 let missing = missing
                     .iter()
