@@ -1194,6 +1194,8 @@ impl ExplorerApp {
                 "{} {} {}x{}{} in {:.1} ms",
                 st.renderer,
                 match s.stage {
+                    Stage::Interactive if s.octree_requests.is_some() => "step",
+                    Stage::Full if s.octree_requests.is_some() => "still step",
                     Stage::Interactive => "interactive",
                     Stage::Full => "full",
                     Stage::Supersampled => "supersampled",

@@ -139,6 +139,76 @@ pub struct BenchRow {
     pub notes: Vec<String>,
 }
 
+/// An octree view held still in the window from its first frame: how long its steps take to
+/// settle it (no leaf asking for subdivision), with a given still-view budget.
+#[derive(Clone, Debug, Serialize)]
+pub struct OctreeSettle {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub target_ms: f64,
+    /// The still view's subdivision per step, in target frame times (0: the moving view's
+    /// budget, which holds the target frame time).
+    pub still_budget: f64,
+    /// From asking for the first frame to the first frame that asked for no subdivision, ms
+    /// (`None`: not settled within the time limit).
+    pub to_settled_ms: Option<f64>,
+    /// Frames shown until then (or until the time limit).
+    pub frames: usize,
+    /// Interval between frames reaching the screen, ms.
+    pub interval_ms: Summary,
+    /// Octree nodes at the last frame shown.
+    pub nodes: u64,
+    /// Subdivisions the last frame shown asked for (0: settled).
+    pub requests_left: u64,
+}
+
+/// Holds `scene`'s view still on the octree in the window's scheduling, for at most
+/// `limit`, with `still_budget` ([`Viewport::octree_still_budget`]).
+pub fn measure_octree_settle(
+    name: &str,
+    scene: &Scene,
+    cfg: &BenchConfig,
+    still_budget: f64,
+    limit: Duration,
+) -> Result<OctreeSettle, String> {
+    let base = RenderRequest {
+        backend: Backend::Octree,
+        ..RenderRequest::default()
+    };
+    let mut rig = Rig::new(scene, base, cfg, None)?;
+    rig.viewport.octree_still_budget = still_budget;
+    let start = Instant::now();
+    while !rig.settled() && start.elapsed() < limit {
+        rig.tick()?;
+    }
+    let settled = rig.settled();
+    let arrivals: Vec<Instant> = rig.shown.iter().map(|s| s.3).collect();
+    let intervals: Vec<f64> = arrivals
+        .windows(2)
+        .map(|w| w[1].duration_since(w[0]).as_secs_f64() * 1e3)
+        .collect();
+    let shown = rig.viewport.shown.as_ref();
+    Ok(OctreeSettle {
+        scene: name.to_string(),
+        width: cfg.width,
+        height: cfg.height,
+        target_ms: cfg.target_ms,
+        still_budget,
+        to_settled_ms: settled.then(|| {
+            arrivals
+                .last()
+                .map_or(0.0, |t| t.duration_since(start).as_secs_f64() * 1e3)
+        }),
+        frames: arrivals.len(),
+        interval_ms: Summary::of(&intervals),
+        nodes: shown
+            .and_then(|s| s.stats.octree.as_ref())
+            .map_or(0, |o| o.nodes),
+        requests_left: shown.and_then(|s| s.octree_requests).unwrap_or(0),
+    })
+}
+
 /// The window's stand-in: a worker, a viewport and a camera.
 struct Rig {
     worker: Worker,
@@ -468,5 +538,27 @@ mod tests {
         // received together are applied as one).
         assert!(e.latency_ms.n >= 1 && e.param_updates_added >= 1, "{e:?}");
         assert!(e.param_updates_added <= 3, "{e:?}");
+    }
+
+    #[test]
+    fn a_still_octree_view_settles_and_the_run_says_when() {
+        let scene = fathom_core::presets::load("sierpinski").unwrap();
+        let cfg = BenchConfig {
+            width: 48,
+            height: 32,
+            target_ms: 33.0,
+            move_secs: 0.5,
+            edits: 0,
+            timeout: Duration::from_secs(60),
+        };
+        let r = measure_octree_settle("sierpinski", &scene, &cfg, 4.0, cfg.timeout).unwrap();
+        let ms = r
+            .to_settled_ms
+            .expect("a tiny view settles within a minute");
+        assert!(ms > 0.0 && r.frames >= 2 && r.nodes > 1, "{r:?}");
+        assert_eq!(r.requests_left, 0, "{r:?}");
+        // Cut short, the run reports what is left instead of a time.
+        let r = measure_octree_settle("sierpinski", &scene, &cfg, 0.0, Duration::ZERO).unwrap();
+        assert!(r.to_settled_ms.is_none() && r.frames == 0, "{r:?}");
     }
 }

@@ -8,7 +8,11 @@
 //! finish (it is short) unless it has run past twice the target. Octree frames step the tree
 //! instead, at full resolution (the octree holds its frame time by its subdivision budget),
 //! until it asks for no more subdivision; their subdivision takes what the render leaves of
-//! the target frame time.
+//! the target frame time. Once such a view has held still for [`OCTREE_STILL_DELAY_MS`],
+//! its steps subdivide for [`Viewport::octree_still_budget`] target frame times each: nothing
+//! on screen moves, so detail matters more than the frame rate, and a moving view's budget
+//! (a tenth of a frame) took minutes to settle a Mandelbulb. Those steps are cancelled as
+//! soon as the view moves again, and their subdivision stops at its next batch.
 //!
 //! A GPU frame cannot be cancelled once submitted, so on the GPU the first refinement waits
 //! until the view has held still for [`GPU_REFINE_DELAY_MS`]: a slider dragged slowly (or a
@@ -25,6 +29,16 @@ use std::time::Instant;
 
 /// How long the view must hold still before the GPU starts refining it, ms.
 pub const GPU_REFINE_DELAY_MS: f64 = 150.0;
+
+/// How long an octree view must hold still before its steps take the still budget, ms (a
+/// camera nudged key by key, or a slider dragged slowly, keeps the moving budget).
+pub const OCTREE_STILL_DELAY_MS: f64 = 150.0;
+
+/// A still octree view's subdivision per step, in target frame times
+/// ([`Viewport::octree_still_budget`]'s default): at a 33 ms target, about 130 ms of splits
+/// after each render, so the picture refines several times a second while most of the time
+/// goes to detail.
+pub const OCTREE_STILL_BUDGET: f64 = 4.0;
 
 /// A frame being rendered.
 struct InFlight {
@@ -55,6 +69,9 @@ pub struct Viewport {
     pub scale: RenderScale,
     /// Supersampling of the last refinement (1: stop at full resolution).
     pub refine_supersample: u32,
+    /// A still octree view's subdivision time per step, in target frame times (0: the moving
+    /// view's budget, a frame rate held while nothing moves).
+    pub octree_still_budget: f64,
     in_flight: Option<InFlight>,
     pub shown: Option<Shown>,
     pub texture: Option<egui::TextureHandle>,
@@ -91,6 +108,7 @@ impl Viewport {
         Viewport {
             scale: RenderScale::new(target_ms),
             refine_supersample: 2,
+            octree_still_budget: OCTREE_STILL_BUDGET,
             in_flight: None,
             shown: None,
             texture: None,
@@ -135,7 +153,10 @@ impl Viewport {
                 if done.stage == Stage::Interactive && done.request.backend != Backend::Octree {
                     self.scale.update(done.scale, done.ms);
                 }
+                // (Octree frames are at full resolution from the first; their still steps
+                // are marked full only to be cancelled at once.)
                 if done.stage >= Stage::Full
+                    && done.request.backend != Backend::Octree
                     && self.full_after_still_ms.is_none()
                     && let Some(t) = self.still_since
                 {
@@ -205,17 +226,22 @@ impl Viewport {
             }
         }
         let octree = base.backend == Backend::Octree;
+        let still_ms = self
+            .still_since
+            .map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64() * 1e3);
         let stage = match &self.shown {
             Some(s) if s.key == key => {
                 if octree {
                     if s.octree_requests == Some(0) {
                         return;
                     }
-                    Stage::Interactive
+                    // A still view's step: the long budget, cancelled when the view moves.
+                    if self.octree_still_budget > 0.0 && still_ms >= OCTREE_STILL_DELAY_MS {
+                        Stage::Full
+                    } else {
+                        Stage::Interactive
+                    }
                 } else if s.stage == Stage::Interactive {
-                    let still_ms = self
-                        .still_since
-                        .map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64() * 1e3);
                     if base.backend == Backend::Gpu && still_ms < GPU_REFINE_DELAY_MS {
                         return;
                     }
@@ -251,7 +277,12 @@ impl Viewport {
             region: None,
             ..base.clone()
         };
-        if octree {
+        if octree && stage == Stage::Full {
+            // Nothing moves: a fixed, long subdivision (at least the request's own).
+            request.octree.target_fps = 0.0;
+            request.octree.subdivide_ms = (self.octree_still_budget * self.scale.target_ms())
+                .max(request.octree.subdivide_ms);
+        } else if octree {
             // The octree's frames hold the same frame time: its subdivision takes what the
             // render leaves of it (between half and all of its budget).
             request.octree.target_fps = 1e3 / self.scale.target_ms();
@@ -320,18 +351,26 @@ mod tests {
         out
     }
 
-    #[test]
-    fn octree_frames_hold_the_target_frame_time_and_a_new_target_keeps_the_tree() {
-        let scene = fathom_core::presets::load("sierpinski").unwrap();
+    /// A worker on `preset` and a viewport stepping its view on the octree (one thread,
+    /// target 40 ms): the worker, the camera, the request, the view's key and the viewport.
+    fn octree_view(preset: &str) -> (Worker, Camera, RenderRequest, u64, Viewport) {
+        let scene = fathom_core::presets::load(preset).unwrap();
         let cam = scene.camera.clone();
-        let mut w = Worker::start(scene, 0, || {}).unwrap();
+        let w = Worker::start(scene, 0, || {}).unwrap();
         let base = RenderRequest {
             backend: Backend::Octree,
             threads: Some(1),
             ..RenderRequest::default()
         };
         let key = view_key(&cam, 0, &base);
-        let mut v = Viewport::new(40.0);
+        (w, cam, base, key, Viewport::new(40.0))
+    }
+
+    #[test]
+    fn octree_frames_hold_the_target_frame_time_and_a_new_target_keeps_the_tree() {
+        let (mut w, cam, base, key, mut v) = octree_view("sierpinski");
+        // The view holds still through this test: keep the moving view's budget.
+        v.octree_still_budget = 0.0;
         let (req, _, requests) = next_frame(&mut v, &mut w, (key, &cam, &base));
         assert_eq!(req.octree.target_fps, 25.0);
         assert!(requests.is_some(), "a stepped octree frame");
@@ -354,5 +393,43 @@ mod tests {
         let finer_key = view_key(&cam, 0, &finer);
         let (_, counters, _) = next_frame(&mut v, &mut w, (finer_key, &cam, &finer));
         assert_eq!(counters.octrees_built, 2);
+    }
+
+    #[test]
+    fn a_still_octree_view_subdivides_longer_and_gives_way_at_once_when_it_moves() {
+        let (mut w, cam, base, key, mut v) = octree_view("mandelbulb");
+        // A short still step (10 ms), so that the tiny view is not settled by the first one.
+        v.octree_still_budget = 0.25;
+        let (req, _, _) = next_frame(&mut v, &mut w, (key, &cam, &base));
+        assert_eq!(
+            req.octree.target_fps, 25.0,
+            "a view just shown steps as if moving"
+        );
+        std::thread::sleep(std::time::Duration::from_secs_f64(
+            OCTREE_STILL_DELAY_MS * 1.2e-3,
+        ));
+        let (req, _, requests) = next_frame(&mut v, &mut w, (key, &cam, &base));
+        assert_eq!(
+            req.octree.target_fps, 0.0,
+            "a still view holds no frame rate"
+        );
+        assert_eq!(req.octree.subdivide_ms, 10.0);
+        assert!(
+            requests.is_some_and(|r| r > 0),
+            "the view is not settled yet"
+        );
+        assert_eq!(v.shown.as_ref().unwrap().stage, Stage::Full);
+        // The next still step is in flight when the camera moves: it is cancelled at once
+        // (an interactive step would be let finish), and the moved view is asked for.
+        v.schedule(&w, key, &cam, &base, (32, 24));
+        let still = v.in_flight.as_ref().unwrap().cancel.clone();
+        assert!(!still.is_cancelled());
+        let mut moved = cam.clone();
+        moved.eye.x += 1e-3;
+        let moved_key = view_key(&moved, 0, &base);
+        v.schedule(&w, moved_key, &moved, &base, (32, 24));
+        assert!(still.is_cancelled());
+        let f = v.in_flight.as_ref().unwrap();
+        assert_eq!((f.key, f.stage), (moved_key, Stage::Interactive));
     }
 }

@@ -283,7 +283,10 @@ fn render(session: &mut Session, job: &FrameJob, generation: u64) -> FrameDone {
     let result = if job.cancel.is_cancelled() {
         Err(FrameFailure::Cancelled)
     } else if job.octree_step && job.request.backend == Backend::Octree {
-        match session.step_octree(&job.camera, &job.request, true) {
+        match session.step_octree(&job.camera, &job.request, true, &control) {
+            // The view moved on during a still view's long subdivision, which stopped early:
+            // its frame is of a view no longer asked for.
+            Ok(_) if job.cancel.is_cancelled() => Err(FrameFailure::Cancelled),
             Ok((Some(frame), st)) => {
                 octree_requests = Some(st.requests);
                 let mut stats = Stats {

@@ -126,8 +126,11 @@ impl OctreeBackend {
         deep: &fathom_svo::DeepEye,
         req: &RenderRequest,
         want_frame: bool,
+        control: &Control,
     ) -> (Option<Frame>, FrameStats) {
-        let (img, st) = self.explorer.step_deep(camera, deep);
+        let (img, st) = self
+            .explorer
+            .step_deep_until(camera, deep, &|| control.cancelled());
         let frame = want_frame.then(|| finish(&img, scene, camera, req));
         (frame, st)
     }

@@ -290,14 +290,17 @@ impl Session {
     /// One frame of exploration with the octree: render the tree as it is, then subdivide
     /// within the request's time budget (and unify every few frames). Returns the finished
     /// frame when `want_frame` (post effects cost time a benchmark does not want) and the
-    /// octree's frame statistics.
+    /// octree's frame statistics. A cancel in `control` stops the subdivision at its next
+    /// batch (the frame itself is rendered whole).
     pub fn step_octree(
         &mut self,
         camera: &Camera,
         req: &RenderRequest,
         want_frame: bool,
+        control: &Control,
     ) -> Result<(Option<Frame>, FrameStats), RenderError> {
-        self.step_octree_deep(camera, &fathom_svo::DeepEye::of(camera), req, want_frame)
+        let deep = fathom_svo::DeepEye::of(camera);
+        self.step_octree_deep(camera, &deep, req, want_frame, control)
     }
 
     /// [`Session::step_octree`] for a zoom past f64: the eye is `camera.eye + deep.eye_lo` (a
@@ -308,9 +311,10 @@ impl Session {
         deep: &fathom_svo::DeepEye,
         req: &RenderRequest,
         want_frame: bool,
+        control: &Control,
     ) -> Result<(Option<Frame>, FrameStats), RenderError> {
         let (scene, ob) = self.octree_at(camera, deep, req)?;
-        Ok(ob.step(&scene, camera, deep, req, want_frame))
+        Ok(ob.step(&scene, camera, deep, req, want_frame, control))
     }
 
     /// Builds the octree for `req` if needed and settles it at the deep camera for at most

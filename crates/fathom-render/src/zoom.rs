@@ -9,6 +9,7 @@
 //! are compared with the double-double reference instead of the f64 tracer.
 
 use crate::compare::{Agreement, Reference, agreement, reduce};
+use crate::control::Control;
 use crate::error::RenderError;
 use crate::request::{Backend, RenderRequest};
 use crate::session::Session;
@@ -485,8 +486,13 @@ impl Zoom {
             }
             let compare_now =
                 self.compare_every > 0 && (i % self.compare_every == 0 || i + 1 == self.frames);
-            let (frame, st) =
-                session.step_octree_deep(&cam, &deep, &req, want_frames || compare_now)?;
+            let (frame, st) = session.step_octree_deep(
+                &cam,
+                &deep,
+                &req,
+                want_frames || compare_now,
+                &Control::default(),
+            )?;
             let mut compared = None;
             if let (true, Some(r), Some(f)) = (compare_now, reference.as_mut(), frame.as_ref()) {
                 let t0 = std::time::Instant::now();

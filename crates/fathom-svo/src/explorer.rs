@@ -794,6 +794,17 @@ impl Explorer {
     /// first, nearer the centre counted larger) within the time budget. Returns
     /// (split, emptied, no-memory).
     pub fn subdivide(&mut self, reqs: Vec<Request>, budget_ms: f64) -> [u64; 3] {
+        self.subdivide_until(reqs, budget_ms, &|| false)
+    }
+
+    /// [`Explorer::subdivide`], stopping early at the first batch after `stop` returns true
+    /// (a window's view moved on: a still view's long budget gives way within a batch).
+    pub fn subdivide_until(
+        &mut self,
+        reqs: Vec<Request>,
+        budget_ms: f64,
+        stop: &dyn Fn() -> bool,
+    ) -> [u64; 3] {
         let t0 = Instant::now();
         let fovea = self.fovea;
         let mut reqs = self.pool.install(|| RequestQueue::new(reqs, &fovea));
@@ -814,7 +825,7 @@ impl Explorer {
         let mut per_sub_ms: Option<f64> = None;
         while next < reqs.len() {
             let elapsed = t0.elapsed().as_secs_f64() * 1e3;
-            if done_min >= self.cfg.min_subdivisions && elapsed >= budget_ms {
+            if (done_min >= self.cfg.min_subdivisions && elapsed >= budget_ms) || stop() {
                 break;
             }
             if self.tree.counts().nodes + 8 > self.tree.max_nodes {
@@ -908,12 +919,23 @@ impl Explorer {
 
     /// [`Explorer::step`] with an eye known more precisely than f64 (see [`DeepEye`]).
     pub fn step_deep(&mut self, cam: &Camera, deep: &DeepEye) -> (SvoImage, FrameStats) {
+        self.step_deep_until(cam, deep, &|| false)
+    }
+
+    /// [`Explorer::step_deep`] whose subdivision stops early once `stop` returns true
+    /// ([`Explorer::subdivide_until`]); the frame is rendered whole either way.
+    pub fn step_deep_until(
+        &mut self,
+        cam: &Camera,
+        deep: &DeepEye,
+        stop: &dyn Fn() -> bool,
+    ) -> (SvoImage, FrameStats) {
         let t0 = Instant::now();
         let (img, reqs, c) = self.render_deep(cam, deep);
         let render_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = Instant::now();
         let nreq = reqs.len() as u64;
-        let sub = self.subdivide(reqs, self.cfg.subdivide_budget(render_ms));
+        let sub = self.subdivide_until(reqs, self.cfg.subdivide_budget(render_ms), stop);
         let subdivide_ms = t1.elapsed().as_secs_f64() * 1e3;
         let t2 = Instant::now();
         let pressure = self.tree.counts().nodes as f64 > 0.9 * self.tree.max_nodes as f64;

@@ -564,3 +564,41 @@ fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
         iou[0]
     );
 }
+
+#[test]
+fn a_subdivision_told_to_stop_ends_at_its_next_batch_and_frees_the_rest() {
+    let mut ex = Explorer::new(&scenes::menger(8), cfg(160, 120)).unwrap();
+    let cam = corner_camera();
+    // Settle until more than two batches (64 a thread) are asked for, so an early stop shows.
+    let mut reqs = Vec::new();
+    for _ in 0..8 {
+        reqs = ex.render(&cam).1;
+        if reqs.len() > 2 * 64 * 2 {
+            break;
+        }
+        ex.subdivide(reqs.clone(), f64::INFINITY);
+    }
+    let asked = reqs.len();
+    assert!(asked > 2 * 64 * 2, "{asked} requests");
+    let nodes = ex.tree.counts().nodes;
+    // Told to stop before it starts: nothing is split, below the floor or not.
+    assert_eq!(ex.subdivide_until(reqs, f64::INFINITY, &|| true)[0], 0);
+    assert_eq!(ex.tree.counts().nodes, nodes);
+    check(&ex.tree).unwrap();
+    // The requests were released: the same leaves are asked for again, and a stop after the
+    // first batch splits that batch only.
+    let (_, reqs, _) = ex.render(&cam);
+    assert_eq!(reqs.len(), asked);
+    let calls = std::cell::Cell::new(0);
+    let split = ex.subdivide_until(reqs, f64::INFINITY, &|| {
+        calls.set(calls.get() + 1);
+        calls.get() > 1
+    });
+    assert!(
+        split[0] + split[1] > 0 && split[0] + split[1] <= 64 * 2,
+        "{split:?}"
+    );
+    check(&ex.tree).unwrap();
+    let (_, reqs, _) = ex.render(&cam);
+    assert!(reqs.len() >= asked - 64 * 2, "{} of {asked}", reqs.len());
+}

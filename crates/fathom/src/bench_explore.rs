@@ -2,9 +2,14 @@
 //! `fathom_app::bench` (the window's own frame scheduling and render worker, driven without a
 //! window) for each scene on the CPU tracer and on the GPU renderer. On a machine without a
 //! GPU the GPU renderer runs on lavapipe, whose times are CPU times (the JSON says so).
+//!
+//! Then, per scene, the octree in the window's scheduling: a view held still from its first
+//! frame, timed to settle with the still view's budget and with the moving view's (the frame
+//! rate held while nothing moves), each within `--octree-secs`.
 
 use clap::Args;
-use fathom_app::bench::{BenchConfig, measure};
+use fathom_app::bench::{BenchConfig, measure, measure_octree_settle};
+use fathom_app::viewport::OCTREE_STILL_BUDGET;
 use fathom_core::presets;
 use std::time::Duration;
 
@@ -31,6 +36,10 @@ pub struct ExploreBenchArgs {
     /// Longest wait for one frame or refinement, seconds.
     #[arg(long, default_value_t = 300.0)]
     pub timeout: f64,
+    /// Longest an octree view is held still to settle, per scene and budget, seconds (0: skip
+    /// the octree rows).
+    #[arg(long, default_value_t = 60.0)]
+    pub octree_secs: f64,
 }
 
 pub fn run(a: ExploreBenchArgs) -> Result<(), String> {
@@ -52,6 +61,12 @@ pub fn run(a: ExploreBenchArgs) -> Result<(), String> {
             a.timeout
         ));
     }
+    if !(a.octree_secs.is_finite() && (0.0..=36000.0).contains(&a.octree_secs)) {
+        return Err(format!(
+            "--octree-secs {} is out of range [0, 36000]",
+            a.octree_secs
+        ));
+    }
     if a.edits > 1000 {
         return Err(format!("--edits {} is more than 1000", a.edits));
     }
@@ -64,6 +79,7 @@ pub fn run(a: ExploreBenchArgs) -> Result<(), String> {
         timeout: Duration::from_secs_f64(a.timeout),
     };
     let mut rows = Vec::new();
+    let mut settles = Vec::new();
     for name in a
         .presets
         .split(',')
@@ -90,6 +106,20 @@ pub fn run(a: ExploreBenchArgs) -> Result<(), String> {
             );
             rows.push(row);
         }
+        if a.octree_secs > 0.0 {
+            for budget in [OCTREE_STILL_BUDGET, 0.0] {
+                eprintln!(
+                    "bench explore: {name} on the octree, held still (still budget {budget})"
+                );
+                let limit = Duration::from_secs_f64(a.octree_secs);
+                let row = measure_octree_settle(name, &scene, &cfg, budget, limit)?;
+                eprintln!(
+                    "{}",
+                    serde_json::to_string(&row).map_err(|e| e.to_string())?
+                );
+                settles.push(row);
+            }
+        }
     }
     let out = serde_json::json!({
         "bench": "explore",
@@ -97,6 +127,7 @@ pub fn run(a: ExploreBenchArgs) -> Result<(), String> {
         "note": "the window's scheduling and render worker without a window: UI drawing is not \
                  included; GPU figures on a software adapter (lavapipe) are CPU times",
         "rows": rows,
+        "octree_settle": settles,
     });
     println!(
         "{}",
