@@ -73,11 +73,13 @@ impl OctreeBackend {
     ) -> Result<Rendered, crate::RenderError> {
         let t0 = Instant::now();
         let mut settle_frames = 0;
+        let deep = fathom_svo::DeepEye::of(camera);
+        let mut settling = fathom_svo::explorer::Settling::default();
         for _ in 0..req.octree.settle_frames {
             if control.cancelled() {
                 return Err(crate::RenderError::Cancelled);
             }
-            let (reqs, _) = self.explorer.probe(camera);
+            let (reqs, _) = self.explorer.probe_settling(camera, &deep, &mut settling);
             if reqs.is_empty() {
                 break;
             }

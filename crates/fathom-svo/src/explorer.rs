@@ -537,13 +537,18 @@ impl Explorer {
         cam: &Camera,
         deep: &DeepEye,
     ) -> (SvoImage, Vec<Request>, [u64; 3]) {
-        self.render_frame(cam, deep, self.cfg.smooth)
+        let drawing = if self.cfg.smooth {
+            Drawing::Smooth
+        } else {
+            Drawing::Blocky
+        };
+        self.render_frame(cam, deep, drawing).0
     }
 
     /// [`Explorer::render_deep`] for a caller that needs only the requests and counts (the
     /// settling loops): the image is dropped, so it is not drawn smooth.
     pub fn probe_deep(&mut self, cam: &Camera, deep: &DeepEye) -> (Vec<Request>, [u64; 3]) {
-        let (_, reqs, counts) = self.render_frame(cam, deep, false);
+        let ((_, reqs, counts), _) = self.render_frame(cam, deep, Drawing::Probe);
         (reqs, counts)
     }
 
@@ -552,13 +557,76 @@ impl Explorer {
         self.probe_deep(cam, &DeepEye::of(cam))
     }
 
-    /// The render, its wide voxels drawn smooth when `smooth` ([`crate::smooth`]).
-    fn render_frame(
+    /// One probe of a settling loop at a fixed camera (subdivisions alone between its
+    /// probes, `settling` kept from one probe to the next): the first casts every pixel, each
+    /// later one only the pixels whose voxel was wider than their footprint at the one
+    /// before. The requests are the ones [`Explorer::probe_deep`] would find: a pixel that
+    /// stopped on a voxel no wider than its footprint, or missed, stops on the same voxel or
+    /// misses again, because subdivision only splits the full leaves rays ask for and empties
+    /// space (links and starts may change, the leaf a ray meets does not). With surface
+    /// planes drawn (rays pass wide leaves) every probe casts every pixel.
+    pub fn probe_settling(
         &mut self,
         cam: &Camera,
         deep: &DeepEye,
-        smooth: bool,
-    ) -> (SvoImage, Vec<Request>, [u64; 3]) {
+        settling: &mut Settling,
+    ) -> (Vec<Request>, [u64; 3]) {
+        let pixels = match settling.pixels.take() {
+            Some(p) if !self.cfg.planes => p,
+            _ => {
+                let ((_, reqs, counts), wide) = self.render_frame(cam, deep, Drawing::Probe);
+                settling.pixels = Some(wide);
+                return (reqs, counts);
+            }
+        };
+        let (o, frame, lod) = self.begin_frame(cam, deep);
+        let w = self.cfg.width as usize;
+        let grid = RayGrid::new(&frame, self.cfg.width, self.cfg.height);
+        let (tree, skip, trav) = (&self.tree, self.skip, self.cfg.traversal);
+        let (reqs, wide, counts) = self.pool.install(|| {
+            pixels
+                .par_chunks(SETTLING_CHUNK)
+                .map(|chunk| {
+                    let (mut reqs, mut wide, mut c) = (Vec::new(), Vec::new(), [0u64; 3]);
+                    let mut entry = None;
+                    for &i in chunk {
+                        let d = grid.dir(i as usize % w, i as usize / w);
+                        let hit = cast(
+                            tree,
+                            &Ray::new(o, d.into(), lod),
+                            skip,
+                            &mut entry,
+                            trav,
+                            &mut reqs,
+                        );
+                        c[0] += 1;
+                        c[2] += hit.steps as u64;
+                        if hit.is_hit() {
+                            c[1] += 1;
+                            if dim_at(hit.depth) >= lod * hit.t {
+                                wide.push(i);
+                            }
+                        }
+                    }
+                    (reqs, wide, c)
+                })
+                .reduce(
+                    || (Vec::new(), Vec::new(), [0u64; 3]),
+                    |(mut ra, mut wa, ca), (rb, wb, cb)| {
+                        ra.extend(rb);
+                        wa.extend(wb);
+                        (ra, wa, std::array::from_fn(|i| ca[i] + cb[i]))
+                    },
+                )
+        });
+        settling.pixels = Some(wide);
+        (reqs, counts)
+    }
+
+    /// A frame's setup at a camera: places the anchor, the shader's origin and view, the skip
+    /// node (clearing the eye's leaf), the LOD factor and the fovea. Returns the eye relative
+    /// to the anchor (root units), the camera's frame and the LOD factor.
+    fn begin_frame(&mut self, cam: &Camera, deep: &DeepEye) -> ([f64; 3], CameraFrame, f64) {
         let frame = cam.frame();
         let scale = deep.scale.max(1e-300);
         let eye_u = self.eye_root_units(cam.eye, deep.eye_lo);
@@ -601,6 +669,20 @@ impl Explorer {
             aspect: w as f64 / h as f64,
             weight: self.cfg.fovea,
         };
+        (o, frame, lod)
+    }
+
+    /// The render, its wide voxels drawn as `drawing` says. A probe's image is not smoothed;
+    /// it also returns the pixels whose voxel was wider than their footprint (for
+    /// [`Explorer::probe_settling`]; empty for the other drawings).
+    fn render_frame(
+        &mut self,
+        cam: &Camera,
+        deep: &DeepEye,
+        drawing: Drawing,
+    ) -> ((SvoImage, Vec<Request>, [u64; 3]), Vec<u32>) {
+        let (o, frame, lod) = self.begin_frame(cam, deep);
+        let (w, h) = (self.cfg.width, self.cfg.height);
         let mut colour = vec![0u32; (w * h) as usize];
         let mut depth = vec![0f32; (w * h) as usize];
         // Each pixel's box half-width for `Smoother::smooth` (0: keep the pixel).
@@ -618,11 +700,13 @@ impl Explorer {
         let tiling = beam > 0 && trav == Traversal::Neighbour;
         let beams = tiling && (skip.is_some() || self.outside_tiles.allows());
         // A hit's voxel is smoothed when its side over its distance reaches this (never when
-        // the image is not smoothed: no box widths are worked out).
-        let wide = if smooth {
-            smooth::MIN_WIDE_PX * pa
-        } else {
-            f64::INFINITY
+        // the image is not smoothed: no box widths are worked out); a probe marks the voxels
+        // wider than their footprint instead.
+        let probe = drawing == Drawing::Probe;
+        let wide = match drawing {
+            Drawing::Smooth => smooth::MIN_WIDE_PX * pa,
+            Drawing::Blocky => f64::INFINITY,
+            Drawing::Probe => lod,
         };
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
         // largest side over distance, compared by cross-multiplying: no division per pixel).
@@ -643,7 +727,11 @@ impl Explorer {
                     *largest = side / hit.t;
                 }
                 if side >= wide * hit.t {
-                    hrow[x] = smooth::half_width(side / (hit.t * pa));
+                    hrow[x] = if probe {
+                        1
+                    } else {
+                        smooth::half_width(side / (hit.t * pa))
+                    };
                 }
                 crow[x] = hit.colour;
                 drow[x] = (hit.t * size) as f32;
@@ -773,7 +861,13 @@ impl Explorer {
             self.outside_tiles.record(beams, cost);
         }
         self.reach = median_hit(&depth, size);
-        if largest >= wide {
+        let marked = if probe {
+            let marked = half.iter().enumerate().filter(|&(_, &m)| m > 0);
+            marked.map(|(i, _)| i as u32).collect()
+        } else {
+            Vec::new()
+        };
+        if largest >= wide && !probe {
             self.pool.install(|| {
                 self.smoother
                     .smooth(&mut colour, &half, w as usize, h as usize);
@@ -787,7 +881,7 @@ impl Explorer {
             depth,
             largest_voxel_px: (largest / pa).min(MAX_VOXEL_PX),
         };
-        (img, reqs, counts)
+        ((img, reqs, counts), marked)
     }
 
     /// Phase 2: subdivides requested leaves in [`RequestQueue`] order (largest on screen
@@ -988,12 +1082,13 @@ impl Explorer {
         budget_ms: f64,
     ) -> usize {
         let t0 = Instant::now();
+        let mut settling = Settling::default();
         for i in 0..max_frames {
             let left = budget_ms - t0.elapsed().as_secs_f64() * 1e3;
             if left <= 0.0 {
                 return i;
             }
-            let (reqs, _) = self.probe_deep(cam, deep);
+            let (reqs, _) = self.probe_settling(cam, deep, &mut settling);
             if reqs.is_empty() {
                 return i;
             }
@@ -1007,6 +1102,27 @@ impl Explorer {
     pub fn settle(&mut self, cam: &Camera, max_frames: usize) -> usize {
         self.settle_deep(cam, &DeepEye::of(cam), max_frames, f64::INFINITY)
     }
+}
+
+/// Which pixels the next probe of a settling loop casts ([`Explorer::probe_settling`]). Keep
+/// one per loop at one camera; a fresh one casts every pixel.
+#[derive(Clone, Debug, Default)]
+pub struct Settling {
+    /// The pixels (`y * width + x`) whose voxel was wider than their footprint at the last
+    /// probe; `None` before the first.
+    pixels: Option<Vec<u32>>,
+}
+
+/// Pixels a worker casts at a time in a settling probe (a unit of rayon's work sharing).
+const SETTLING_CHUNK: usize = 256;
+
+/// How a frame is drawn: its wide voxels smoothed or as blocks, or only probed for the
+/// requests (no image wanted, wide voxels marked).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Drawing {
+    Smooth,
+    Blocky,
+    Probe,
 }
 
 /// A frame's unification unloads a brick once this many unifications in a row found it

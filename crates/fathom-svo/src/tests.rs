@@ -602,3 +602,76 @@ fn a_subdivision_told_to_stop_ends_at_its_next_batch_and_frees_the_rest() {
     let (_, reqs, _) = ex.render(&cam);
     assert!(reqs.len() >= asked - 64 * 2, "{} of {asked}", reqs.len());
 }
+
+#[test]
+fn settling_probes_that_cast_only_wide_pixels_build_the_tree_probes_of_every_pixel_build() {
+    let mb = fathom_core::presets::load("mandelbulb").unwrap();
+    for (name, scene, cam) in [
+        ("menger", scenes::menger(8), corner_camera()),
+        ("mandelbulb", mb.clone(), mb.camera.clone()),
+    ] {
+        // Every pixel at every probe, as the settling loops did before.
+        let mut every = Explorer::new(&scene, cfg(96, 72)).unwrap();
+        let mut rounds = 0;
+        loop {
+            let (reqs, _) = every.probe(&cam);
+            if reqs.is_empty() {
+                break;
+            }
+            every.subdivide(reqs, f64::INFINITY);
+            rounds += 1;
+            assert!(rounds < 200, "{name}: not settled");
+        }
+        // Only the pixels that were on a wide voxel, after the first probe.
+        let mut wide = Explorer::new(&scene, cfg(96, 72)).unwrap();
+        let mut settling = crate::explorer::Settling::default();
+        let deep = crate::DeepEye::of(&cam);
+        let mut cast = Vec::new();
+        loop {
+            let (reqs, counts) = wide.probe_settling(&cam, &deep, &mut settling);
+            cast.push(counts[0]);
+            if reqs.is_empty() {
+                break;
+            }
+            wide.subdivide(reqs, f64::INFINITY);
+        }
+        assert_eq!(cast.len(), rounds + 1, "{name}: rounds");
+        assert_eq!(
+            cast[0],
+            96 * 72,
+            "{name}: the first probe casts every pixel"
+        );
+        // The later probes cast fewer and fewer pixels, the last hardly any.
+        let total: u64 = cast.iter().sum();
+        assert!(
+            total * 2 < (96 * 72) as u64 * cast.len() as u64,
+            "{name}: {cast:?}"
+        );
+        check(&wide.tree).unwrap();
+        let (na, nb) = (every.tree.counts().nodes, wide.tree.counts().nodes);
+        let (a, b) = (every.render(&cam).0, wide.render(&cam).0);
+        let differ = a
+            .colour
+            .iter()
+            .zip(&b.colour)
+            .filter(|(x, y)| x != y)
+            .count();
+        eprintln!(
+            "{name}: {rounds} probes, pixels cast {cast:?}; nodes {na} and {nb}, {differ} \
+             pixels differ"
+        );
+        if name == "menger" {
+            // A bound scene: the same requests make the same tree.
+            assert_eq!((na, &a), (nb, &b), "{name}: the settled trees differ");
+        } else {
+            // An estimate scene's split tests one level down below the asking ray's
+            // footprint, and which ray of a leaf asks first depends on the order rays are
+            // cast in (as it does on the number of threads): the trees differ a little.
+            assert!(na.abs_diff(nb) * 200 <= na, "{name}: {na} and {nb} nodes");
+            assert!(
+                differ * 100 <= a.colour.len(),
+                "{name}: {differ} pixels differ"
+            );
+        }
+    }
+}
