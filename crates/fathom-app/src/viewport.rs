@@ -398,7 +398,7 @@ mod tests {
     #[test]
     fn a_still_octree_view_subdivides_longer_and_gives_way_at_once_when_it_moves() {
         let (mut w, cam, base, key, mut v) = octree_view("mandelbulb");
-        // A short still step (10 ms), so that the tiny view is not settled by the first one.
+        // Still steps of 10 ms (the view is far from settled after two steps either way).
         v.octree_still_budget = 0.25;
         let (req, _, _) = next_frame(&mut v, &mut w, (key, &cam, &base));
         assert_eq!(

@@ -283,10 +283,14 @@ fn render(session: &mut Session, job: &FrameJob, generation: u64) -> FrameDone {
     let result = if job.cancel.is_cancelled() {
         Err(FrameFailure::Cancelled)
     } else if job.octree_step && job.request.backend == Backend::Octree {
-        match session.step_octree(&job.camera, &job.request, true, &control) {
-            // The view moved on during a still view's long subdivision, which stopped early:
-            // its frame is of a view no longer asked for.
-            Ok(_) if job.cancel.is_cancelled() => Err(FrameFailure::Cancelled),
+        // Only a still view's step (its long subdivision) gives way to a cancel; a moving
+        // view's step is short, and shown even when overdue.
+        let still = job.stage == Stage::Full;
+        let stop = if still { control } else { Control::default() };
+        match session.step_octree(&job.camera, &job.request, true, &stop) {
+            // The view moved on during a still view's subdivision, which stopped early: its
+            // frame is of a view no longer asked for.
+            Ok(_) if still && job.cancel.is_cancelled() => Err(FrameFailure::Cancelled),
             Ok((Some(frame), st)) => {
                 octree_requests = Some(st.requests);
                 let mut stats = Stats {

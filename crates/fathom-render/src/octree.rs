@@ -80,6 +80,12 @@ impl OctreeBackend {
                 return Err(crate::RenderError::Cancelled);
             }
             let (reqs, _) = self.explorer.probe_settling(camera, &deep, &mut settling);
+            // Progress: the pixels no longer on voxels wider than their footprint.
+            let cfg = &self.explorer.cfg;
+            let total = cfg.width as usize * cfg.height as usize;
+            if let Some(pending) = settling.pending() {
+                control.report(total - pending.min(total), total);
+            }
             if reqs.is_empty() {
                 break;
             }

@@ -539,3 +539,41 @@ fn coarse_octree_frames_drawn_smooth_are_closer_to_the_tracer_and_settled_ones_u
     assert!(largest <= 1.0, "largest voxel {largest} px");
     assert_eq!(format!("{smooth:?}"), format!("{blocky:?}"));
 }
+
+#[test]
+fn a_settling_octree_still_reports_progress_by_the_pixels_it_has_settled() {
+    let scene = presets::load("menger").unwrap();
+    let cam = scene.camera.clone();
+    let mut s = Session::new(scene).unwrap();
+    let req = RenderRequest {
+        backend: Backend::Octree,
+        threads: Some(2),
+        ..request(96, 72)
+    };
+    let seen = std::sync::Mutex::new(Vec::new());
+    let progress = |p: Progress| seen.lock().unwrap().push((p.done, p.total));
+    let control = Control {
+        cancel: None,
+        progress: Some(&progress),
+    };
+    let r = s.render_with(&cam, &req, &control).unwrap();
+    let seen = seen.into_inner().unwrap();
+    let settle = r.stats.octree.unwrap().settle_frames;
+    // One report a probe (the last finds nothing to split), then the frame's own.
+    assert_eq!(seen.len(), settle + 2, "{seen:?}");
+    let probes = &seen[..seen.len() - 1];
+    assert!(probes.iter().all(|&(_, t)| t == 96 * 72), "{seen:?}");
+    assert!(
+        probes.windows(2).all(|w| w[0].0 <= w[1].0),
+        "not monotonic: {seen:?}"
+    );
+    assert!(
+        seen[0].0 < 96 * 72 / 2,
+        "most pixels start on wide voxels: {seen:?}"
+    );
+    assert_eq!(
+        seen.last(),
+        Some(&(1, 1)),
+        "then the finished frame: {seen:?}"
+    );
+}

@@ -559,12 +559,12 @@ impl Explorer {
 
     /// One probe of a settling loop at a fixed camera (subdivisions alone between its
     /// probes, `settling` kept from one probe to the next): the first casts every pixel, each
-    /// later one only the pixels whose voxel was wider than their footprint at the one
-    /// before. The requests are the ones [`Explorer::probe_deep`] would find: a pixel that
-    /// stopped on a voxel no wider than its footprint, or missed, stops on the same voxel or
-    /// misses again, because subdivision only splits the full leaves rays ask for and empties
-    /// space (links and starts may change, the leaf a ray meets does not). With surface
-    /// planes drawn (rays pass wide leaves) every probe casts every pixel.
+    /// later one only the pixels whose voxel could still change ([`settling_wide`]). The
+    /// requests are the ones [`Explorer::probe_deep`] would find: subdivision splits only
+    /// full leaves some ray asked for and only empties space (links and starts may change,
+    /// the leaf a ray meets does not), so a pixel that missed misses again, and one that
+    /// stopped on a voxel no ray could ask for stops on it again. With surface planes drawn
+    /// (rays pass wide leaves) every probe casts every pixel.
     pub fn probe_settling(
         &mut self,
         cam: &Camera,
@@ -583,6 +583,7 @@ impl Explorer {
         let w = self.cfg.width as usize;
         let grid = RayGrid::new(&frame, self.cfg.width, self.cfg.height);
         let (tree, skip, trav) = (&self.tree, self.skip, self.cfg.traversal);
+        let wide_at = settling_wide(lod);
         let (reqs, wide, counts) = self.pool.install(|| {
             pixels
                 .par_chunks(SETTLING_CHUNK)
@@ -603,7 +604,7 @@ impl Explorer {
                         c[2] += hit.steps as u64;
                         if hit.is_hit() {
                             c[1] += 1;
-                            if dim_at(hit.depth) >= lod * hit.t {
+                            if dim_at(hit.depth) >= wide_at * hit.t {
                                 wide.push(i);
                             }
                         }
@@ -706,7 +707,7 @@ impl Explorer {
         let wide = match drawing {
             Drawing::Smooth => smooth::MIN_WIDE_PX * pa,
             Drawing::Blocky => f64::INFINITY,
-            Drawing::Probe => lod,
+            Drawing::Probe => settling_wide(lod),
         };
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
         // largest side over distance, compared by cross-multiplying: no division per pixel).
@@ -1111,6 +1112,24 @@ pub struct Settling {
     /// The pixels (`y * width + x`) whose voxel was wider than their footprint at the last
     /// probe; `None` before the first.
     pixels: Option<Vec<u32>>,
+}
+
+impl Settling {
+    /// Pixels still on voxels wider than their footprint at the last probe (`None` before
+    /// the first): they only ever leave, so `width * height` minus this is a settling loop's
+    /// progress.
+    pub fn pending(&self) -> Option<usize> {
+        self.pixels.as_ref().map(Vec::len)
+    }
+}
+
+/// The LOD factor past which a settling probe counts a pixel's voxel as one that may still
+/// change: its side over its distance reaches `lod / (1 + 2 lod)`, not `lod`. A voxel no
+/// wider than this pixel's footprint can still be asked for by a ray that meets it nearer, up
+/// to its diagonal (`sqrt 3` sides) nearer; split, it may turn out empty, and this pixel's ray
+/// would then go on past it.
+fn settling_wide(lod: f64) -> f64 {
+    lod / (1.0 + 2.0 * lod)
 }
 
 /// Pixels a worker casts at a time in a settling probe (a unit of rayon's work sharing).

