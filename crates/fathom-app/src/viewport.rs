@@ -9,10 +9,11 @@
 //! instead, at full resolution (the octree holds its frame time by its subdivision budget),
 //! until it asks for no more subdivision; their subdivision takes what the render leaves of
 //! the target frame time. Once such a view has held still for [`OCTREE_STILL_DELAY_MS`],
-//! its steps subdivide for [`Viewport::octree_still_budget`] target frame times each: nothing
-//! on screen moves, so detail matters more than the frame rate, and a moving view's budget
-//! (a tenth of a frame) took minutes to settle a Mandelbulb. Those steps are cancelled as
-//! soon as the view moves again, and their subdivision stops at its next batch.
+//! its steps subdivide for [`Viewport::octree_still_budget`] target frame times each, going
+//! on past their render's requests to the pixels it left unsettled: nothing on screen moves,
+//! so detail matters more than the frame rate, and a moving view's budget (a tenth of a
+//! frame) took minutes to settle a Mandelbulb. Those steps are cancelled as soon as the view
+//! moves again, and their subdivision stops at its next batch.
 //!
 //! A GPU frame cannot be cancelled once submitted, so on the GPU the first refinement waits
 //! until the view has held still for [`GPU_REFINE_DELAY_MS`]: a slider dragged slowly (or a

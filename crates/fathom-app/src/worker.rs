@@ -287,7 +287,7 @@ fn render(session: &mut Session, job: &FrameJob, generation: u64) -> FrameDone {
         // view's step is short, and shown even when overdue.
         let still = job.stage == Stage::Full;
         let stop = if still { control } else { Control::default() };
-        match session.step_octree(&job.camera, &job.request, true, &stop) {
+        match session.step_octree(&job.camera, &job.request, true, still, &stop) {
             // The view moved on during a still view's subdivision, which stopped early: its
             // frame is of a view no longer asked for.
             Ok(_) if still && job.cancel.is_cancelled() => Err(FrameFailure::Cancelled),

@@ -126,7 +126,9 @@ impl OctreeBackend {
         Ok(Rendered { frame, stats })
     }
 
-    /// One stepped frame (render the tree as it is, subdivide, maybe unify).
+    /// One stepped frame (render the tree as it is, subdivide, maybe unify); a `still` one
+    /// settles on within its budget ([`fathom_svo::Explorer::step_deep_until`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn step(
         &mut self,
         scene: &Scene,
@@ -134,11 +136,12 @@ impl OctreeBackend {
         deep: &fathom_svo::DeepEye,
         req: &RenderRequest,
         want_frame: bool,
+        still: bool,
         control: &Control,
     ) -> (Option<Frame>, FrameStats) {
         let (img, st) = self
             .explorer
-            .step_deep_until(camera, deep, &|| control.cancelled());
+            .step_deep_until(camera, deep, still, &|| control.cancelled());
         let frame = want_frame.then(|| finish(&img, scene, camera, req));
         (frame, st)
     }

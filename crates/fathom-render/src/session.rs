@@ -297,10 +297,12 @@ impl Session {
         camera: &Camera,
         req: &RenderRequest,
         want_frame: bool,
+        still: bool,
         control: &Control,
     ) -> Result<(Option<Frame>, FrameStats), RenderError> {
         let deep = fathom_svo::DeepEye::of(camera);
-        self.step_octree_deep(camera, &deep, req, want_frame, control)
+        let (scene, ob) = self.octree_at(camera, &deep, req)?;
+        Ok(ob.step(&scene, camera, &deep, req, want_frame, still, control))
     }
 
     /// [`Session::step_octree`] for a zoom past f64: the eye is `camera.eye + deep.eye_lo` (a
@@ -314,7 +316,7 @@ impl Session {
         control: &Control,
     ) -> Result<(Option<Frame>, FrameStats), RenderError> {
         let (scene, ob) = self.octree_at(camera, deep, req)?;
-        Ok(ob.step(&scene, camera, deep, req, want_frame, control))
+        Ok(ob.step(&scene, camera, deep, req, want_frame, false, control))
     }
 
     /// Builds the octree for `req` if needed and settles it at the deep camera for at most

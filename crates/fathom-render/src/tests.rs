@@ -114,7 +114,7 @@ fn a_new_time_budget_fovea_or_smoothing_steps_the_same_octree_and_a_new_fidelity
         backend: Backend::Octree,
         ..request(40, 30)
     };
-    s.step_octree(&cam, &req, false, &Control::default())
+    s.step_octree(&cam, &req, false, false, &Control::default())
         .unwrap();
     // Values other than the defaults, so that each one is seen to arrive.
     assert_ne!(req.octree.subdivide_ms, 5.0);
@@ -124,7 +124,7 @@ fn a_new_time_budget_fovea_or_smoothing_steps_the_same_octree_and_a_new_fidelity
     req.octree.target_fps = 45.0;
     req.octree.fovea = 0.0;
     req.octree.smooth = false;
-    s.step_octree(&cam, &req, false, &Control::default())
+    s.step_octree(&cam, &req, false, false, &Control::default())
         .unwrap();
     assert_eq!(s.counters().octrees_built, 1);
     let cfg = &s.octree().unwrap().cfg;
@@ -133,7 +133,7 @@ fn a_new_time_budget_fovea_or_smoothing_steps_the_same_octree_and_a_new_fidelity
         (5.0, 45.0, 0.0, false)
     );
     req.octree.fidelity = 2.0;
-    s.step_octree(&cam, &req, false, &Control::default())
+    s.step_octree(&cam, &req, false, false, &Control::default())
         .unwrap();
     assert_eq!(s.counters().octrees_built, 2);
 }
@@ -459,7 +459,7 @@ fn still_octree_vs_tracer(
     let mut last = None;
     for _ in 0..frames {
         let (f, st) = s
-            .step_octree(&cam, &req, true, &Control::default())
+            .step_octree(&cam, &req, true, false, &Control::default())
             .unwrap();
         last = Some((f.unwrap(), st.largest_voxel_px));
     }

@@ -542,13 +542,13 @@ impl Explorer {
         } else {
             Drawing::Blocky
         };
-        self.render_frame(cam, deep, drawing).0
+        self.render_frame(cam, deep, drawing, false).0
     }
 
     /// [`Explorer::render_deep`] for a caller that needs only the requests and counts (the
     /// settling loops): the image is dropped, so it is not drawn smooth.
     pub fn probe_deep(&mut self, cam: &Camera, deep: &DeepEye) -> (Vec<Request>, [u64; 3]) {
-        let ((_, reqs, counts), _) = self.render_frame(cam, deep, Drawing::Probe);
+        let ((_, reqs, counts), _) = self.render_frame(cam, deep, Drawing::Probe, false);
         (reqs, counts)
     }
 
@@ -574,7 +574,7 @@ impl Explorer {
         let pixels = match settling.pixels.take() {
             Some(p) if !self.cfg.planes => p,
             _ => {
-                let ((_, reqs, counts), wide) = self.render_frame(cam, deep, Drawing::Probe);
+                let ((_, reqs, counts), wide) = self.render_frame(cam, deep, Drawing::Probe, true);
                 settling.pixels = Some(wide);
                 return (reqs, counts);
             }
@@ -673,14 +673,15 @@ impl Explorer {
         (o, frame, lod)
     }
 
-    /// The render, its wide voxels drawn as `drawing` says. A probe's image is not smoothed;
-    /// it also returns the pixels whose voxel was wider than their footprint (for
-    /// [`Explorer::probe_settling`]; empty for the other drawings).
+    /// The render, its wide voxels drawn as `drawing` says (a probe's image is not
+    /// smoothed). When `marking`, it also returns the pixels not yet settled, for the next
+    /// [`Explorer::probe_settling`] (else an empty list).
     fn render_frame(
         &mut self,
         cam: &Camera,
         deep: &DeepEye,
         drawing: Drawing,
+        marking: bool,
     ) -> ((SvoImage, Vec<Request>, [u64; 3]), Vec<u32>) {
         let (o, frame, lod) = self.begin_frame(cam, deep);
         let (w, h) = (self.cfg.width, self.cfg.height);
@@ -701,14 +702,20 @@ impl Explorer {
         let tiling = beam > 0 && trav == Traversal::Neighbour;
         let beams = tiling && (skip.is_some() || self.outside_tiles.allows());
         // A hit's voxel is smoothed when its side over its distance reaches this (never when
-        // the image is not smoothed: no box widths are worked out); a probe marks the voxels
-        // wider than their footprint instead.
+        // the image is not smoothed: no box widths are worked out).
         let probe = drawing == Drawing::Probe;
         let wide = match drawing {
             Drawing::Smooth => smooth::MIN_WIDE_PX * pa,
-            Drawing::Blocky => f64::INFINITY,
-            Drawing::Probe => settling_wide(lod),
+            Drawing::Blocky | Drawing::Probe => f64::INFINITY,
         };
+        // A pixel is marked not yet settled when its voxel's side over its distance reaches
+        // this (for a settling loop's next probe, [`Explorer::probe_settling`]).
+        let unsettled = if marking {
+            settling_wide(lod)
+        } else {
+            f64::INFINITY
+        };
+        let mut marks = vec![0u8; (w * h) as usize];
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
         // largest side over distance, compared by cross-multiplying: no division per pixel).
         let put = |x: usize,
@@ -717,6 +724,7 @@ impl Explorer {
                    crow: &mut [u32],
                    drow: &mut [f32],
                    hrow: &mut [u8],
+                   mrow: &mut [u8],
                    c: &mut [u64; 5],
                    largest: &mut f64| {
             c[0] += 1;
@@ -728,11 +736,10 @@ impl Explorer {
                     *largest = side / hit.t;
                 }
                 if side >= wide * hit.t {
-                    hrow[x] = if probe {
-                        1
-                    } else {
-                        smooth::half_width(side / (hit.t * pa))
-                    };
+                    hrow[x] = smooth::half_width(side / (hit.t * pa));
+                }
+                if side >= unsettled * hit.t {
+                    mrow[x] = 1;
                 }
                 crow[x] = hit.colour;
                 drow[x] = (hit.t * size) as f32;
@@ -775,8 +782,9 @@ impl Explorer {
                     .par_chunks_mut(band)
                     .zip(depth.par_chunks_mut(band))
                     .zip(half.par_chunks_mut(band))
+                    .zip(marks.par_chunks_mut(band))
                     .enumerate()
-                    .map(|(k, ((cband, dband), hband))| {
+                    .map(|(k, (((cband, dband), hband), mband))| {
                         let mut reqs = Vec::new();
                         let mut c = [0u64; 5];
                         let mut largest = 0f64;
@@ -816,6 +824,7 @@ impl Explorer {
                                 let crow = &mut cband[j * wu..(j + 1) * wu];
                                 let drow = &mut dband[j * wu..(j + 1) * wu];
                                 let hrow = &mut hband[j * wu..(j + 1) * wu];
+                                let mrow = &mut mband[j * wu..(j + 1) * wu];
                                 grid.segment(y, x0, n, o, lod, &mut span, |x, d, r| {
                                     let hit = starts
                                         .at(x, y)
@@ -824,7 +833,7 @@ impl Explorer {
                                             c[4] += 1;
                                             cast_neighbour(tree, r, skip, &mut entry, &mut reqs)
                                         });
-                                    put(x, d, hit, crow, drow, hrow, &mut c, &mut largest);
+                                    put(x, d, hit, crow, drow, hrow, mrow, &mut c, &mut largest);
                                 });
                             }
                         }
@@ -836,8 +845,9 @@ impl Explorer {
                     .par_chunks_mut(w as usize)
                     .zip(depth.par_chunks_mut(w as usize))
                     .zip(half.par_chunks_mut(w as usize))
+                    .zip(marks.par_chunks_mut(w as usize))
                     .enumerate()
-                    .map(|(y, ((crow, drow), hrow))| {
+                    .map(|(y, (((crow, drow), hrow), mrow))| {
                         let mut reqs = Vec::new();
                         let mut c = [0u64; 5];
                         let mut largest = 0f64;
@@ -846,7 +856,7 @@ impl Explorer {
                         let mut span = RaySpan::default();
                         grid.row(y, o, lod, &mut span, |x, d, r| {
                             let hit = cast(tree, r, skip, &mut entry, trav, &mut reqs);
-                            put(x, d, hit, crow, drow, hrow, &mut c, &mut largest);
+                            put(x, d, hit, crow, drow, hrow, mrow, &mut c, &mut largest);
                         });
                         (reqs, c, largest)
                     })
@@ -862,8 +872,8 @@ impl Explorer {
             self.outside_tiles.record(beams, cost);
         }
         self.reach = median_hit(&depth, size);
-        let marked = if probe {
-            let marked = half.iter().enumerate().filter(|&(_, &m)| m > 0);
+        let marked = if marking {
+            let marked = marks.iter().enumerate().filter(|&(_, &m)| m > 0);
             marked.map(|(i, _)| i as u32).collect()
         } else {
             Vec::new()
@@ -1014,23 +1024,52 @@ impl Explorer {
 
     /// [`Explorer::step`] with an eye known more precisely than f64 (see [`DeepEye`]).
     pub fn step_deep(&mut self, cam: &Camera, deep: &DeepEye) -> (SvoImage, FrameStats) {
-        self.step_deep_until(cam, deep, &|| false)
+        self.step_deep_until(cam, deep, false, &|| false)
     }
 
     /// [`Explorer::step_deep`] whose subdivision stops early once `stop` returns true
-    /// ([`Explorer::subdivide_until`]); the frame is rendered whole either way.
+    /// ([`Explorer::subdivide_until`]); the frame is rendered whole either way. A `still`
+    /// step (a view that is not moving, the camera the same as the last step's) goes on
+    /// settling within its budget once the render's requests are split: probes of the pixels
+    /// the render left unsettled ([`Explorer::probe_settling`]), and their splits, a level of
+    /// detail each, so a still view settles in fewer steps.
     pub fn step_deep_until(
         &mut self,
         cam: &Camera,
         deep: &DeepEye,
+        still: bool,
         stop: &dyn Fn() -> bool,
     ) -> (SvoImage, FrameStats) {
         let t0 = Instant::now();
-        let (img, reqs, c) = self.render_deep(cam, deep);
+        let drawing = if self.cfg.smooth {
+            Drawing::Smooth
+        } else {
+            Drawing::Blocky
+        };
+        let ((img, reqs, c), unsettled) = self.render_frame(cam, deep, drawing, still);
         let render_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = Instant::now();
         let nreq = reqs.len() as u64;
-        let sub = self.subdivide_until(reqs, self.cfg.subdivide_budget(render_ms), stop);
+        let budget = self.cfg.subdivide_budget(render_ms);
+        let mut sub = self.subdivide_until(reqs, budget, stop);
+        if still {
+            let mut settling = Settling {
+                pixels: Some(unsettled),
+            };
+            loop {
+                let left = budget - t1.elapsed().as_secs_f64() * 1e3;
+                if left <= 0.0 || stop() {
+                    break;
+                }
+                let (reqs, _) = self.probe_settling(cam, deep, &mut settling);
+                if reqs.is_empty() {
+                    break;
+                }
+                let left = budget - t1.elapsed().as_secs_f64() * 1e3;
+                let more = self.subdivide_until(reqs, left, stop);
+                sub = std::array::from_fn(|i| sub[i] + more[i]);
+            }
+        }
         let subdivide_ms = t1.elapsed().as_secs_f64() * 1e3;
         let t2 = Instant::now();
         let pressure = self.tree.counts().nodes as f64 > 0.9 * self.tree.max_nodes as f64;

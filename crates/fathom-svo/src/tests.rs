@@ -680,3 +680,28 @@ fn settling_probes_that_cast_only_wide_pixels_build_the_tree_probes_of_every_pix
         }
     }
 }
+
+#[test]
+fn a_still_step_settles_past_its_own_requests_to_the_settled_tree() {
+    let cam = corner_camera();
+    let mut c = cfg(96, 72);
+    c.subdivide_ms = 1e9; // no time limit: whatever the step does, it does to the end
+    let deep = crate::DeepEye::of(&cam);
+    // A moving view's step splits only what its render asked for.
+    let mut moving = Explorer::new(&scenes::menger(8), c.clone()).unwrap();
+    moving.step_deep_until(&cam, &deep, false, &|| false);
+    assert!(!moving.probe(&cam).0.is_empty());
+    // A still one goes on probing the pixels its render left unsettled, to the end.
+    let mut still = Explorer::new(&scenes::menger(8), c.clone()).unwrap();
+    let (_, st) = still.step_deep_until(&cam, &deep, true, &|| false);
+    assert!(still.probe(&cam).0.is_empty(), "settled in one still step");
+    let mut settled = Explorer::new(&scenes::menger(8), c).unwrap();
+    settled.settle(&cam, 100);
+    assert_eq!(still.tree.counts().nodes, settled.tree.counts().nodes);
+    assert_eq!(st.subdivisions as usize * 8 + 1, still.tree.counts().nodes);
+    check(&still.tree).unwrap();
+    // Told to stop, it stops after the render's first batch of splits.
+    let mut stopped = Explorer::new(&scenes::menger(8), cfg(96, 72)).unwrap();
+    let (_, st) = stopped.step_deep_until(&cam, &deep, true, &|| true);
+    assert_eq!(st.subdivisions, 0);
+}
