@@ -537,12 +537,16 @@ impl Explorer {
         cam: &Camera,
         deep: &DeepEye,
     ) -> (SvoImage, Vec<Request>, [u64; 3]) {
-        let drawing = if self.cfg.smooth {
+        self.render_frame(cam, deep, self.drawing(), false).0
+    }
+
+    /// How a frame to be seen is drawn: its wide voxels smooth or blocky, as configured.
+    fn drawing(&self) -> Drawing {
+        if self.cfg.smooth {
             Drawing::Smooth
         } else {
             Drawing::Blocky
-        };
-        self.render_frame(cam, deep, drawing, false).0
+        }
     }
 
     /// [`Explorer::render_deep`] for a caller that needs only the requests and counts (the
@@ -703,7 +707,6 @@ impl Explorer {
         let beams = tiling && (skip.is_some() || self.outside_tiles.allows());
         // A hit's voxel is smoothed when its side over its distance reaches this (never when
         // the image is not smoothed: no box widths are worked out).
-        let probe = drawing == Drawing::Probe;
         let wide = match drawing {
             Drawing::Smooth => smooth::MIN_WIDE_PX * pa,
             Drawing::Blocky | Drawing::Probe => f64::INFINITY,
@@ -878,7 +881,9 @@ impl Explorer {
         } else {
             Vec::new()
         };
-        if largest >= wide && !probe {
+        // (Only a smoothed drawing has a finite width: a ray met at distance 0 makes
+        // `largest` infinite.)
+        if wide.is_finite() && largest >= wide {
             self.pool.install(|| {
                 self.smoother
                     .smooth(&mut colour, &half, w as usize, h as usize);
@@ -1041,12 +1046,7 @@ impl Explorer {
         stop: &dyn Fn() -> bool,
     ) -> (SvoImage, FrameStats) {
         let t0 = Instant::now();
-        let drawing = if self.cfg.smooth {
-            Drawing::Smooth
-        } else {
-            Drawing::Blocky
-        };
-        let ((img, reqs, c), unsettled) = self.render_frame(cam, deep, drawing, still);
+        let ((img, reqs, c), unsettled) = self.render_frame(cam, deep, self.drawing(), still);
         let render_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = Instant::now();
         let nreq = reqs.len() as u64;
