@@ -249,7 +249,7 @@ pub struct FrameStats {
     pub frame_ms: f64,
     /// Render phase in ms.
     pub render_ms: f64,
-    /// Subdivision phase in ms.
+    /// Subdivision phase in ms (on a window's still step, its settling probes too).
     pub subdivide_ms: f64,
     /// Unification phase in ms.
     pub unify_ms: f64,
@@ -259,13 +259,15 @@ pub struct FrameStats {
     pub hits: u64,
     /// Mean nodes stepped through per ray.
     pub nodes_per_ray: f64,
-    /// Distinct leaves rays asked to subdivide.
+    /// Distinct leaves rays asked to subdivide (`rays`, `hits`, `nodes_per_ray` and this
+    /// count the render's rays only, not a still step's settling probes).
     pub requests: u64,
-    /// Leaves split into children.
+    /// Leaves split into children (on a still step, more than `requests` when its settling
+    /// probes asked for more).
     pub subdivisions: u64,
     /// Leaves whose children were all empty.
     pub emptied: u64,
-    /// Subdivisions refused by the memory budget.
+    /// Requests of the render refused by the memory budget.
     pub no_memory: u64,
     /// Bricks unloaded.
     pub unified: u64,
@@ -575,12 +577,29 @@ impl Explorer {
         deep: &DeepEye,
         settling: &mut Settling,
     ) -> (Vec<Request>, [u64; 3]) {
+        self.probe_settling_until(cam, deep, settling, &|| false)
+            .unwrap_or_default()
+    }
+
+    /// [`Explorer::probe_settling`], giving way when `stop` returns true before one of its
+    /// slices of [`PROBE_SLICE`] pixels: `None`, its requests released and `settling` left
+    /// without pixels (the next probe casts every pixel).
+    pub fn probe_settling_until(
+        &mut self,
+        cam: &Camera,
+        deep: &DeepEye,
+        settling: &mut Settling,
+        stop: &dyn Fn() -> bool,
+    ) -> Option<(Vec<Request>, [u64; 3])> {
         let pixels = match settling.pixels.take() {
             Some(p) if !self.cfg.planes => p,
             _ => {
+                if stop() {
+                    return None;
+                }
                 let ((_, reqs, counts), wide) = self.render_frame(cam, deep, Drawing::Probe, true);
                 settling.pixels = Some(wide);
-                return (reqs, counts);
+                return Some((reqs, counts));
             }
         };
         let (o, frame, lod) = self.begin_frame(cam, deep);
@@ -588,44 +607,54 @@ impl Explorer {
         let grid = RayGrid::new(&frame, self.cfg.width, self.cfg.height);
         let (tree, skip, trav) = (&self.tree, self.skip, self.cfg.traversal);
         let wide_at = settling_wide(lod);
-        let (reqs, wide, counts) = self.pool.install(|| {
-            pixels
-                .par_chunks(SETTLING_CHUNK)
-                .map(|chunk| {
-                    let (mut reqs, mut wide, mut c) = (Vec::new(), Vec::new(), [0u64; 3]);
-                    let mut entry = None;
-                    for &i in chunk {
-                        let d = grid.dir(i as usize % w, i as usize / w);
-                        let hit = cast(
-                            tree,
-                            &Ray::new(o, d.into(), lod),
-                            skip,
-                            &mut entry,
-                            trav,
-                            &mut reqs,
-                        );
-                        c[0] += 1;
-                        c[2] += hit.steps as u64;
-                        if hit.is_hit() {
-                            c[1] += 1;
-                            if dim_at(hit.depth) >= wide_at * hit.t {
-                                wide.push(i);
+        let (mut reqs, mut wide, mut counts) = (Vec::new(), Vec::new(), [0u64; 3]);
+        for slice in pixels.chunks(PROBE_SLICE) {
+            if stop() {
+                self.release_requests(&reqs);
+                return None;
+            }
+            let (r, wd, c) = self.pool.install(|| {
+                slice
+                    .par_chunks(SETTLING_CHUNK)
+                    .map(|chunk| {
+                        let (mut reqs, mut wide, mut c) = (Vec::new(), Vec::new(), [0u64; 3]);
+                        let mut entry = None;
+                        for &i in chunk {
+                            let d = grid.dir(i as usize % w, i as usize / w);
+                            let hit = cast(
+                                tree,
+                                &Ray::new(o, d.into(), lod),
+                                skip,
+                                &mut entry,
+                                trav,
+                                &mut reqs,
+                            );
+                            c[0] += 1;
+                            c[2] += hit.steps as u64;
+                            if hit.is_hit() {
+                                c[1] += 1;
+                                if dim_at(hit.depth) >= wide_at * hit.t {
+                                    wide.push(i);
+                                }
                             }
                         }
-                    }
-                    (reqs, wide, c)
-                })
-                .reduce(
-                    || (Vec::new(), Vec::new(), [0u64; 3]),
-                    |(mut ra, mut wa, ca), (rb, wb, cb)| {
-                        ra.extend(rb);
-                        wa.extend(wb);
-                        (ra, wa, std::array::from_fn(|i| ca[i] + cb[i]))
-                    },
-                )
-        });
+                        (reqs, wide, c)
+                    })
+                    .reduce(
+                        || (Vec::new(), Vec::new(), [0u64; 3]),
+                        |(mut ra, mut wa, ca), (rb, wb, cb)| {
+                            ra.extend(rb);
+                            wa.extend(wb);
+                            (ra, wa, std::array::from_fn(|i| ca[i] + cb[i]))
+                        },
+                    )
+            });
+            reqs.extend(r);
+            wide.extend(wd);
+            counts = std::array::from_fn(|i| counts[i] + c[i]);
+        }
         settling.pixels = Some(wide);
-        (reqs, counts)
+        Some((reqs, counts))
     }
 
     /// A frame's setup at a camera: places the anchor, the shader's origin and view, the skip
@@ -915,6 +944,19 @@ impl Explorer {
         budget_ms: f64,
         stop: &dyn Fn() -> bool,
     ) -> [u64; 3] {
+        let floor = self.cfg.min_subdivisions;
+        self.subdivide_within(reqs, budget_ms, floor, stop)
+    }
+
+    /// [`Explorer::subdivide_until`] with `floor` for the subdivisions done whatever the
+    /// time ([`ExplorerConfig::min_subdivisions`]).
+    fn subdivide_within(
+        &mut self,
+        reqs: Vec<Request>,
+        budget_ms: f64,
+        floor: usize,
+        stop: &dyn Fn() -> bool,
+    ) -> [u64; 3] {
         let t0 = Instant::now();
         let fovea = self.fovea;
         let mut reqs = self.pool.install(|| RequestQueue::new(reqs, &fovea));
@@ -935,7 +977,7 @@ impl Explorer {
         let mut per_sub_ms: Option<f64> = None;
         while next < reqs.len() {
             let elapsed = t0.elapsed().as_secs_f64() * 1e3;
-            if (done_min >= self.cfg.min_subdivisions && elapsed >= budget_ms) || stop() {
+            if (done_min >= floor && elapsed >= budget_ms) || stop() {
                 break;
             }
             if self.tree.counts().nodes + 8 > self.tree.max_nodes {
@@ -945,8 +987,8 @@ impl Explorer {
             // subdivisions past it (72 where 52 reach it) took deep frames to 15-19 ms.
             // Past it, no more than the time left is expected to hold (at least one per
             // thread): whole batches ran a Menger zoom's 12 ms budget to 14 ms a frame.
-            let size = if done_min < self.cfg.min_subdivisions {
-                batch.min((self.cfg.min_subdivisions - done_min).div_ceil(weight))
+            let size = if done_min < floor {
+                batch.min((floor - done_min).div_ceil(weight))
             } else if let Some(c) = per_sub_ms {
                 let fit = ((budget_ms - elapsed) / c).floor();
                 if fit < 1.0 {
@@ -1056,18 +1098,37 @@ impl Explorer {
             let mut settling = Settling {
                 pixels: Some(unsettled),
             };
+            // What a probe's ray costs, first from the render's (tile starts make those
+            // cheaper), then from the last probe's.
+            let mut ray_ms = render_ms / c[0].max(1) as f64;
             loop {
                 let left = budget - t1.elapsed().as_secs_f64() * 1e3;
-                if left <= 0.0 || stop() {
+                let pending = match &settling.pixels {
+                    Some(p) if !self.cfg.planes => p.len(),
+                    _ => (self.cfg.width * self.cfg.height) as usize,
+                };
+                // A round starts only when its probe is expected to fit in what is left,
+                // and ends the loop when it split and emptied nothing (the memory budget
+                // spent, or only requests no split can serve).
+                if pending as f64 * ray_ms > left || stop() {
                     break;
                 }
-                let (reqs, _) = self.probe_settling(cam, deep, &mut settling);
+                let tp = Instant::now();
+                let Some((reqs, pc)) = self.probe_settling_until(cam, deep, &mut settling, stop)
+                else {
+                    break;
+                };
+                ray_ms = tp.elapsed().as_secs_f64() * 1e3 / pc[0].max(1) as f64;
                 if reqs.is_empty() {
                     break;
                 }
                 let left = budget - t1.elapsed().as_secs_f64() * 1e3;
-                let more = self.subdivide_until(reqs, left, stop);
-                sub = std::array::from_fn(|i| sub[i] + more[i]);
+                let more = self.subdivide_within(reqs, left, 0, stop);
+                sub[0] += more[0];
+                sub[1] += more[1];
+                if more[0] + more[1] == 0 {
+                    break;
+                }
             }
         }
         let subdivide_ms = t1.elapsed().as_secs_f64() * 1e3;
@@ -1173,6 +1234,10 @@ fn settling_wide(lod: f64) -> f64 {
 
 /// Pixels a worker casts at a time in a settling probe (a unit of rayon's work sharing).
 const SETTLING_CHUNK: usize = 256;
+
+/// Pixels a settling probe casts between its checks of a stop
+/// ([`Explorer::probe_settling_until`]): a tenth of a 640x480 frame's rays.
+pub const PROBE_SLICE: usize = 1 << 15;
 
 /// How a frame is drawn: its wide voxels smoothed or as blocks, or only probed for the
 /// requests (no image wanted, wide voxels marked).

@@ -687,21 +687,34 @@ fn a_still_step_settles_past_its_own_requests_to_the_settled_tree() {
     let mut c = cfg(96, 72);
     c.subdivide_ms = 1e9; // no time limit: whatever the step does, it does to the end
     let deep = crate::DeepEye::of(&cam);
-    // A moving view's step splits only what its render asked for.
+    // A moving view's step splits only what its render asked for (the stop is asked
+    // `asked` times on the way, never true).
     let mut moving = Explorer::new(&scenes::menger(8), c.clone()).unwrap();
-    moving.step_deep_until(&cam, &deep, false, &|| false);
+    let asked = std::cell::Cell::new(0usize);
+    let (_, mv) = moving.step_deep_until(&cam, &deep, false, &|| {
+        asked.set(asked.get() + 1);
+        false
+    });
+    assert!(mv.subdivisions > 0);
     assert!(!moving.probe(&cam).0.is_empty());
     // A still one goes on probing the pixels its render left unsettled, to the end.
     let mut still = Explorer::new(&scenes::menger(8), c.clone()).unwrap();
     let (_, st) = still.step_deep_until(&cam, &deep, true, &|| false);
     assert!(still.probe(&cam).0.is_empty(), "settled in one still step");
-    let mut settled = Explorer::new(&scenes::menger(8), c).unwrap();
+    let mut settled = Explorer::new(&scenes::menger(8), c.clone()).unwrap();
     settled.settle(&cam, 100);
     assert_eq!(still.tree.counts().nodes, settled.tree.counts().nodes);
     assert_eq!(st.subdivisions as usize * 8 + 1, still.tree.counts().nodes);
     check(&still.tree).unwrap();
-    // Told to stop, it stops after the render's first batch of splits.
-    let mut stopped = Explorer::new(&scenes::menger(8), cfg(96, 72)).unwrap();
-    let (_, st) = stopped.step_deep_until(&cam, &deep, true, &|| true);
-    assert_eq!(st.subdivisions, 0);
+    // Told to stop once the render's requests are split (the stop turns true at its first
+    // question past the moving step's), it settles no further: the moving step's splits.
+    let mut stopped = Explorer::new(&scenes::menger(8), c).unwrap();
+    let n = asked.get();
+    asked.set(0);
+    let (_, st) = stopped.step_deep_until(&cam, &deep, true, &|| {
+        asked.set(asked.get() + 1);
+        asked.get() > n
+    });
+    assert_eq!(st.subdivisions, mv.subdivisions);
+    assert!(!stopped.probe(&cam).0.is_empty());
 }
