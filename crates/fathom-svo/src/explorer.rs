@@ -267,7 +267,8 @@ pub struct FrameStats {
     pub subdivisions: u64,
     /// Leaves whose children were all empty.
     pub emptied: u64,
-    /// Requests of the render refused by the memory budget.
+    /// Requests refused by the memory budget (on a still step, its settling probes' too:
+    /// the step settles no further once the budget is spent, so none is counted twice).
     pub no_memory: u64,
     /// Bricks unloaded.
     pub unified: u64,
@@ -1107,10 +1108,11 @@ impl Explorer {
                     Some(p) if !self.cfg.planes => p.len(),
                     _ => (self.cfg.width * self.cfg.height) as usize,
                 };
-                // A round starts only when its probe is expected to fit in what is left,
-                // and ends the loop when it split and emptied nothing (the memory budget
-                // spent, or only requests no split can serve).
-                if pending as f64 * ray_ms > left || stop() {
+                // A round starts only when its probe is expected to fit in what is left and
+                // the memory budget has room, and ends the loop when it split and emptied
+                // nothing (only requests no split can serve).
+                let full = self.tree.counts().nodes + 8 > self.tree.max_nodes;
+                if full || pending as f64 * ray_ms > left || stop() {
                     break;
                 }
                 let tp = Instant::now();
@@ -1124,8 +1126,7 @@ impl Explorer {
                 }
                 let left = budget - t1.elapsed().as_secs_f64() * 1e3;
                 let more = self.subdivide_within(reqs, left, 0, stop);
-                sub[0] += more[0];
-                sub[1] += more[1];
+                sub = std::array::from_fn(|i| sub[i] + more[i]);
                 if more[0] + more[1] == 0 {
                     break;
                 }

@@ -682,6 +682,30 @@ fn settling_probes_that_cast_only_wide_pixels_build_the_tree_probes_of_every_pix
 }
 
 #[test]
+fn a_still_step_that_fills_the_memory_budget_ends_there_and_counts_each_refusal_once() {
+    // A 1 MiB budget (21845 nodes) the Menger corner at 160x120 outgrows within a step;
+    // a 2 s budget the step must not spend re-probing for splits memory cannot hold.
+    let mut c = cfg(160, 120);
+    c.max_memory = 1 << 20;
+    c.subdivide_ms = 2000.0;
+    let mut ex = Explorer::new(&scenes::menger(8), c).unwrap();
+    let cam = corner_camera();
+    let (_, st) = ex.step_deep_until(&cam, &crate::DeepEye::of(&cam), true, &|| false);
+    let max = ex.tree.max_nodes as u64;
+    assert!(st.no_memory > 0, "the budget was not reached: {st:?}");
+    assert!(st.node_count <= max);
+    // Each refused leaf once: fewer refusals than the budget's nodes (a round after the
+    // budget is spent would count the same leaves again, round after round).
+    assert!(
+        st.no_memory < max,
+        "{} refusals for {max} nodes",
+        st.no_memory
+    );
+    assert!(st.subdivide_ms < 1500.0, "spent {} ms", st.subdivide_ms);
+    check(&ex.tree).unwrap();
+}
+
+#[test]
 fn a_still_step_settles_past_its_own_requests_to_the_settled_tree() {
     let cam = corner_camera();
     let mut c = cfg(96, 72);
