@@ -143,6 +143,7 @@ impl OctreeBackend {
             .explorer
             .step_deep_until(camera, deep, still, &|| control.cancelled());
         let frame = want_frame.then(|| finish(&img, scene, camera, req));
+        self.explorer.recycle(img);
         (frame, st)
     }
 }
