@@ -1022,7 +1022,7 @@ impl Explorer {
             if (done_min >= floor && elapsed >= budget_ms) || stop() {
                 break;
             }
-            if self.tree.counts().nodes + 8 > self.tree.max_nodes {
+            if self.tree.is_full() {
                 break;
             }
             // Below the floor, no more than it still needs: a whole batch of double-double
@@ -1071,7 +1071,7 @@ impl Explorer {
         for r in reqs.from(next) {
             self.tree.nodes[r.id as usize].clear_flags(REQUESTED);
         }
-        if next < reqs.len() && self.tree.counts().nodes + 8 > self.tree.max_nodes {
+        if next < reqs.len() && self.tree.is_full() {
             out[2] += (reqs.len() - next) as u64;
         }
         self.tree.commit_frees();
@@ -1153,7 +1153,7 @@ impl Explorer {
                 // A round starts only when its probe is expected to fit in what is left and
                 // the memory budget has room, and ends the loop when it split and emptied
                 // nothing (only requests no split can serve).
-                let full = self.tree.counts().nodes + 8 > self.tree.max_nodes;
+                let full = self.tree.is_full();
                 if full || pending as f64 * ray_ms > left || stop() {
                     break;
                 }

@@ -448,9 +448,16 @@ impl Octree {
         (self.anchor.depth + ANCHOR_SPAN).min(MAX_DEPTH)
     }
 
+    /// Whether the memory budget has no room for another block of 8 children: the one test
+    /// allocation, the subdivision loops and the settling rounds all stop on.
+    #[inline]
+    pub fn is_full(&self) -> bool {
+        self.counts.nodes + 8 > self.max_nodes
+    }
+
     /// Allocates a block of 8 child slots, or `None` when the memory budget is exhausted.
     pub fn alloc_block(&mut self) -> Option<u32> {
-        if self.counts.nodes + 8 > self.max_nodes {
+        if self.is_full() {
             return None;
         }
         self.counts.nodes += 8;
