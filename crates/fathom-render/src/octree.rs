@@ -23,9 +23,9 @@ pub(crate) struct OctreeBackend {
     key: (u64, ExplorerConfig),
 }
 
-/// The settings that shape the tree: `cfg` with its per-frame time budgets, request order and
-/// smoothing set to their defaults (they decide how much a frame refines, where first and how
-/// wide voxels are drawn, not what the tree settles to).
+/// The settings that shape the tree: `cfg` with its per-frame time budgets, request order,
+/// smoothing and filling set to their defaults (they decide how much a frame refines, where
+/// first and how wide voxels are drawn, not what the tree settles to).
 fn tree_settings(cfg: &ExplorerConfig) -> ExplorerConfig {
     let d = ExplorerConfig::default();
     ExplorerConfig {
@@ -33,6 +33,7 @@ fn tree_settings(cfg: &ExplorerConfig) -> ExplorerConfig {
         target_fps: d.target_fps,
         fovea: d.fovea,
         smooth: d.smooth,
+        fill_px: d.fill_px,
         ..cfg.clone()
     }
 }
@@ -56,8 +57,8 @@ impl OctreeBackend {
             counters.octrees_built += 1;
             *slot = Some(OctreeBackend { explorer, key });
         }
-        // The kept explorer's settings differ at most in the budgets, the fovea and the
-        // smoothing: take the new ones.
+        // The kept explorer's settings differ at most in the budgets, the fovea, the
+        // smoothing and the filling: take the new ones.
         let ob = slot.as_mut().expect("built above");
         ob.explorer.cfg = cfg;
         Ok(ob)

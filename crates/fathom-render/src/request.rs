@@ -90,6 +90,10 @@ pub struct OctreeSettings {
     /// wide as its voxel on screen ([`fathom_svo::smooth`]; frames whose voxels are all
     /// narrower, settled frames at fidelity below 2, are unchanged).
     pub smooth: bool,
+    /// Pixels between lattice rays (two pixels apart) that all met one voxel at least this
+    /// many pixels wide take its colour without casting ([`fathom_svo::fill`]; 0: every pixel
+    /// casts), 0 or [2, 64].
+    pub fill_px: f64,
 }
 
 impl Default for OctreeSettings {
@@ -109,6 +113,7 @@ impl Default for OctreeSettings {
             planes: false,
             fovea: fathom_svo::request_order::DEFAULT_FOVEA,
             smooth: true,
+            fill_px: fathom_svo::fill::DEFAULT_FILL_PX,
         }
     }
 }
@@ -345,6 +350,7 @@ impl RenderRequest {
             planes: o.planes,
             fovea: o.fovea,
             smooth: o.smooth,
+            fill_px: o.fill_px,
             root: match o.root {
                 Some(c) => RootSpec::from_cube(Some(c)),
                 None => RootSpec::Fit { half: o.fit_half },

@@ -31,6 +31,8 @@ pub enum OctreeError {
     BeamMin(u32),
     #[error("fovea {0} is out of range [0, 64] (0: requests served by size on screen alone)")]
     Fovea(f64),
+    #[error("fill-px {0} is out of range 0 or [2, 64] pixels (0: every pixel casts its ray)")]
+    FillPx(f64),
     #[error(transparent)]
     Compile(#[from] CompileError),
     #[error("cannot start {threads} threads: {message}")]

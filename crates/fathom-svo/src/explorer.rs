@@ -15,13 +15,14 @@
 
 use crate::error::OctreeError;
 use crate::evict::unify;
+use crate::fill;
 use crate::frustum::{Seed, StartPath, TileStack, TileStart, cast_at, tile_start, walk_root};
 use crate::generate::{
     Children, Origin, Outcome, Probe, Shader, View, apply, eval_children, init_root,
 };
 use crate::node::{NONE, REQUESTED, pack_rgb};
 use crate::octree::{Anchor, BoxU, Octree, dim_at};
-use crate::ray_grid::{RayGrid, RaySpan};
+use crate::ray_grid::{RayGrid, RaySpan, SPAN};
 use crate::request_order::{DEFAULT_FOVEA, Fovea, RequestQueue};
 use crate::root::RootSpec;
 use crate::smooth::{self, Smoother};
@@ -101,6 +102,10 @@ pub struct ExplorerConfig {
     /// show the leaves' colours joined smoothly instead of a mosaic. Frames whose voxels are
     /// all narrower (settled frames at fidelity below 2) are unchanged.
     pub smooth: bool,
+    /// Pixels between rays that all met one voxel at least this many pixels wide take that
+    /// voxel's colour without a ray of their own ([`crate::fill`]; tiled renders of frames to
+    /// be seen; 0: every pixel casts), 0 or [2, 64].
+    pub fill_px: f64,
 }
 
 impl Default for ExplorerConfig {
@@ -129,6 +134,7 @@ impl Default for ExplorerConfig {
             planes: false,
             fovea: DEFAULT_FOVEA,
             smooth: true,
+            fill_px: crate::fill::DEFAULT_FILL_PX,
         }
     }
 }
@@ -172,6 +178,9 @@ impl ExplorerConfig {
         }
         if !(self.fovea.is_finite() && (0.0..=64.0).contains(&self.fovea)) {
             return Err(OctreeError::Fovea(self.fovea));
+        }
+        if !(self.fill_px == 0.0 || (2.0..=64.0).contains(&self.fill_px)) {
+            return Err(OctreeError::FillPx(self.fill_px));
         }
         self.root.validate()
     }
@@ -294,6 +303,9 @@ pub struct FrameStats {
     /// walk cut short, or a degenerate frustum), or their start point was within a rounding
     /// margin of a leaf's face at the start distance and at both earlier tries.
     pub rays_from_skip: u64,
+    /// Pixels that took the hit of the lattice rays around them instead of casting a ray
+    /// ([`crate::fill`]; not counted in `rays`).
+    pub filled: u64,
 }
 
 /// Resident set size of this process in bytes (Linux), or 0.
@@ -342,6 +354,8 @@ pub struct Explorer {
     frame: u64,
     beam_steps: u64,
     rays_from_skip: u64,
+    /// Pixels the last render filled without a ray ([`crate::fill`]).
+    filled: u64,
     /// Whether renders with the eye outside the root use tile starts.
     outside_tiles: OutsideTiles,
     /// The last render's LOD factor ([`Ray::lod`]): a requested leaf's children narrower
@@ -413,6 +427,7 @@ impl Explorer {
             frame: 0,
             beam_steps: 0,
             rays_from_skip: 0,
+            filled: 0,
             outside_tiles: OutsideTiles::default(),
             lod: 0.0,
             reach: f64::INFINITY,
@@ -787,41 +802,52 @@ impl Explorer {
         } else {
             f64::INFINITY
         };
+        // A pixel between lattice rays that met one voxel at least this wide (side over
+        // distance) takes their hit ([`crate::fill`]); never in a probe.
+        let fill_wide = match drawing {
+            Drawing::Smooth | Drawing::Blocky if self.cfg.fill_px > 0.0 => self.cfg.fill_px * pa,
+            _ => f64::INFINITY,
+        };
+        let rule = match drawing {
+            Drawing::Smooth => fill::Rule::Blended,
+            _ => fill::Rule::Shared,
+        };
         let mut marks = zeroed(std::mem::take(&mut self.buffers.marks), n);
         // One pixel: its hit (or sky) into the row, the counts and the largest voxel (as the
         // largest side over distance, compared by cross-multiplying: no division per pixel).
+        // Counts: rays cast, their hits, their steps, tile walks' steps, rays from the skip
+        // node, pixels filled without a ray (`filled`: [`crate::fill::shared`]).
         let put = |x: usize,
                    d: DVec3,
                    hit: Hit,
-                   crow: &mut [u32],
-                   drow: &mut [f32],
-                   hrow: &mut [u8],
-                   mrow: &mut [u8],
-                   c: &mut [u64; 5],
-                   largest: &mut f64| {
-            c[0] += 1;
+                   row: &mut PixelRow,
+                   c: &mut [u64; 6],
+                   largest: &mut f64,
+                   filled: bool| {
+            c[0] += u64::from(!filled);
+            c[5] += u64::from(filled);
             c[2] += hit.steps as u64;
             if hit.is_hit() {
-                c[1] += 1;
+                c[1] += u64::from(!filled);
                 let side = dim_at(hit.depth);
                 if side > *largest * hit.t {
                     *largest = side / hit.t;
                 }
                 if side >= wide * hit.t {
-                    hrow[x] = smooth::half_width(side / (hit.t * pa));
+                    row.half[x] = smooth::half_width(side / (hit.t * pa));
                 }
                 if side >= unsettled * hit.t {
-                    mrow[x] = 1;
+                    row.marks[x] = 1;
                 }
-                crow[x] = hit.colour;
-                drow[x] = (hit.t * size) as f32;
+                row.colour[x] = hit.colour;
+                row.depth[x] = (hit.t * size) as f32;
             } else {
-                crow[x] = sky_colour(&frame, d, sky);
-                drow[x] = f32::INFINITY;
+                row.colour[x] = sky_colour(&frame, d, sky);
+                row.depth[x] = f32::INFINITY;
             }
         };
-        let reduce = |(mut ra, ca, la): (Vec<Request>, [u64; 5], f64),
-                      (rb, cb, lb): (Vec<Request>, [u64; 5], f64)| {
+        let reduce = |(mut ra, ca, la): (Vec<Request>, [u64; 6], f64),
+                      (rb, cb, lb): (Vec<Request>, [u64; 6], f64)| {
             ra.extend(rb);
             (ra, std::array::from_fn(|i| ca[i] + cb[i]), la.max(lb))
         };
@@ -856,12 +882,19 @@ impl Explorer {
                     .zip(half.par_chunks_mut(band))
                     .zip(marks.par_chunks_mut(band))
                     .enumerate()
-                    .map(|(k, (((cband, dband), hband), mband))| {
+                    .map(|(k, (((colour, depth), half), marks))| {
+                        let mut band = PixelBand {
+                            colour,
+                            depth,
+                            half,
+                            marks,
+                            width: w as usize,
+                        };
                         let mut reqs = Vec::new();
-                        let mut c = [0u64; 5];
+                        let mut c = [0u64; 6];
                         let mut largest = 0f64;
                         let y0 = k * beam;
-                        let y1 = y0 + cband.len() / w as usize - 1;
+                        let y1 = y0 + band.rows() - 1;
                         let mut starts = FineStarts::new(w as usize, y0, y1, fine);
                         let last = (w as usize - 1, y1);
                         let mut stack = TileStack::new();
@@ -889,29 +922,67 @@ impl Explorer {
                         // (`StartPath`); cast row by row across the band, every `fine`th
                         // ray began a fresh descent at a tile boundary.
                         let wu = w as usize;
+                        let rows = y1 - y0 + 1;
+                        // The hits of a tile's lattice rays ([`crate::fill`]).
+                        let mut lattice: Vec<Hit> = Vec::new();
+                        // Pixel ray `r` of (`x`, `y`) from its tile's start, or from the skip
+                        // node when the start does not serve it.
+                        macro_rules! cast {
+                            ($x:expr, $y:expr, $r:expr) => {
+                                starts
+                                    .at($x, $y)
+                                    .and_then(|s| cast_at(tree, $r, &s, &mut path, &mut reqs))
+                                    .unwrap_or_else(|| {
+                                        c[4] += 1;
+                                        cast_neighbour(tree, $r, skip, &mut entry, &mut reqs)
+                                    })
+                            };
+                        }
                         for x0 in (0..wu).step_by(fine) {
                             let n = fine.min(wu - x0);
-                            for j in 0..=y1 - y0 {
+                            if fill_wide.is_finite() && n <= SPAN {
+                                // The lattice's rows first, then the rows between; on a
+                                // lattice row its lattice rays first, then the pixels between.
+                                let nx = fill::lattice_len(n);
+                                lattice.clear();
+                                lattice.resize(nx * fill::lattice_len(rows), NO_HIT);
+                                for j in fill::row_order(rows) {
+                                    let y = y0 + j;
+                                    let mut row = band.row(j);
+                                    grid.span(y, x0, n, &mut span);
+                                    let on_lattice = fill::lattice_index(rows, j);
+                                    // Lattice rows above and below a row between them.
+                                    let ky = on_lattice.unwrap_or(j / 2);
+                                    for step in 0..n {
+                                        let on = on_lattice.is_some();
+                                        let (i, shared) = fill::visit(
+                                            &lattice, n, nx, on, ky, step, rule, fill_wide,
+                                        );
+                                        let (hit, filled) = match shared {
+                                            Some(hit) => (hit, true),
+                                            None => (cast!(x0 + i, y, &span.ray(i, o, lod)), false),
+                                        };
+                                        if on_lattice.is_some() && step < nx {
+                                            lattice[ky * nx + step] = hit;
+                                        }
+                                        let (x, d) = (x0 + i, span.dir(i));
+                                        put(x, d, hit, &mut row, &mut c, &mut largest, filled);
+                                    }
+                                }
+                                continue;
+                            }
+                            for j in 0..rows {
                                 let y = y0 + j;
-                                let crow = &mut cband[j * wu..(j + 1) * wu];
-                                let drow = &mut dband[j * wu..(j + 1) * wu];
-                                let hrow = &mut hband[j * wu..(j + 1) * wu];
-                                let mrow = &mut mband[j * wu..(j + 1) * wu];
+                                let mut row = band.row(j);
                                 grid.segment(y, x0, n, o, lod, &mut span, |x, d, r| {
-                                    let hit = starts
-                                        .at(x, y)
-                                        .and_then(|s| cast_at(tree, r, &s, &mut path, &mut reqs))
-                                        .unwrap_or_else(|| {
-                                            c[4] += 1;
-                                            cast_neighbour(tree, r, skip, &mut entry, &mut reqs)
-                                        });
-                                    put(x, d, hit, crow, drow, hrow, mrow, &mut c, &mut largest);
+                                    let hit = cast!(x, y, r);
+                                    put(x, d, hit, &mut row, &mut c, &mut largest, false);
                                 });
                             }
                         }
                         (reqs, c, largest)
                     })
-                    .reduce(|| (Vec::new(), [0u64; 5], 0f64), reduce)
+                    .reduce(|| (Vec::new(), [0u64; 6], 0f64), reduce)
             } else {
                 colour
                     .par_chunks_mut(w as usize)
@@ -919,28 +990,36 @@ impl Explorer {
                     .zip(half.par_chunks_mut(w as usize))
                     .zip(marks.par_chunks_mut(w as usize))
                     .enumerate()
-                    .map(|(y, (((crow, drow), hrow), mrow))| {
+                    .map(|(y, (((colour, depth), half), marks))| {
+                        let mut row = PixelRow {
+                            colour,
+                            depth,
+                            half,
+                            marks,
+                        };
                         let mut reqs = Vec::new();
-                        let mut c = [0u64; 5];
+                        let mut c = [0u64; 6];
                         let mut largest = 0f64;
                         // Where the previous ray of this row entered the root (eye outside).
                         let mut entry = None;
                         let mut span = RaySpan::default();
                         grid.row(y, o, lod, &mut span, |x, d, r| {
                             let hit = cast(tree, r, skip, &mut entry, trav, &mut reqs);
-                            put(x, d, hit, crow, drow, hrow, mrow, &mut c, &mut largest);
+                            put(x, d, hit, &mut row, &mut c, &mut largest, false);
                         });
                         (reqs, c, largest)
                     })
-                    .reduce(|| (Vec::new(), [0u64; 5], 0f64), reduce)
+                    .reduce(|| (Vec::new(), [0u64; 6], 0f64), reduce)
             }
         });
         self.beam_steps = counts[3];
         self.rays_from_skip = counts[4];
+        self.filled = counts[5];
         if tiling && skip.is_none() {
-            // Steps per ray, a tile walk's node visits counted twice (a visit tests a box
-            // against the tile's frustum, more than a ray's step costs).
-            let cost = (counts[2] + counts[3]) as f64 / counts[0].max(1) as f64;
+            // Steps per pixel, a tile walk's node visits counted twice (a visit tests a box
+            // against the tile's frustum, more than a ray's step costs); per pixel, not per
+            // ray, so the pixels tiled renders fill without a ray count in their favour.
+            let cost = (counts[2] + counts[3]) as f64 / (counts[0] + counts[5]).max(1) as f64;
             self.outside_tiles.record(beams, cost);
         }
         self.reach = median_hit(&depth, size);
@@ -1209,6 +1288,7 @@ impl Explorer {
             largest_voxel_px: img.largest_voxel_px,
             beam_nodes_per_ray: self.beam_steps as f64 / c[0].max(1) as f64,
             rays_from_skip: self.rays_from_skip,
+            filled: self.filled,
         };
         self.frame += 1;
         (img, stats)
@@ -1309,6 +1389,51 @@ pub const ANCHOR_LEVELS_ABOVE: u8 = 36;
 
 /// The median hit distance (root units) of a sample of a frame's pixels (`depth` in world
 /// units, infinite for a miss; `size` the root's side), infinite when none hit.
+/// One row of a frame's per-pixel buffers, as a render fills it.
+struct PixelRow<'a> {
+    colour: &'a mut [u32],
+    depth: &'a mut [f32],
+    /// Box half-widths for [`Smoother::smooth`] (0: keep the pixel).
+    half: &'a mut [u8],
+    /// 1: not yet settled (the next settling probe casts the pixel).
+    marks: &'a mut [u8],
+}
+
+/// A band of whole rows of a frame's per-pixel buffers, `width` pixels a row.
+struct PixelBand<'a> {
+    colour: &'a mut [u32],
+    depth: &'a mut [f32],
+    half: &'a mut [u8],
+    marks: &'a mut [u8],
+    width: usize,
+}
+
+impl PixelBand<'_> {
+    fn rows(&self) -> usize {
+        self.colour.len() / self.width
+    }
+
+    /// The band's `j`th row.
+    fn row(&mut self, j: usize) -> PixelRow<'_> {
+        let r = j * self.width..(j + 1) * self.width;
+        PixelRow {
+            colour: &mut self.colour[r.clone()],
+            depth: &mut self.depth[r.clone()],
+            half: &mut self.half[r.clone()],
+            marks: &mut self.marks[r],
+        }
+    }
+}
+
+/// A lattice slot before its ray is cast ([`crate::fill`]).
+const NO_HIT: Hit = Hit {
+    t: f64::INFINITY,
+    colour: 0,
+    node: NONE,
+    steps: 0,
+    depth: 0,
+};
+
 fn median_hit(depth: &[f32], size: f64) -> f64 {
     let mut t: Vec<f32> = depth
         .iter()
@@ -1599,10 +1724,13 @@ mod frame_buffers_tests {
 
     #[test]
     fn a_render_into_reused_buffers_draws_what_fresh_buffers_draw() {
+        // Every pixel cast: from outside the root the second render goes without tiles to
+        // compare their cost, and only tiled renders fill pixels.
         let cfg = ExplorerConfig {
             width: 96,
             height: 72,
             threads: 2,
+            fill_px: 0.0,
             ..ExplorerConfig::default()
         };
         let mut ex = Explorer::new(&fathom_core::scenes::menger(8), cfg).unwrap();
@@ -1644,5 +1772,89 @@ mod frame_buffers_tests {
             "a render into reused buffers differs from a fresh one"
         );
         assert_eq!(marked_again, marked);
+    }
+}
+
+#[cfg(test)]
+mod fill_tests {
+    use super::*;
+
+    fn menger_explorer() -> (Explorer, Camera) {
+        let cfg = ExplorerConfig {
+            width: 128,
+            height: 96,
+            threads: 2,
+            ..ExplorerConfig::default()
+        };
+        let ex = Explorer::new(&fathom_core::scenes::menger(8), cfg).unwrap();
+        let cam = Camera {
+            eye: DVec3::new(1.9, 1.7, 1.5),
+            target: DVec3::new(0.6, 0.5, 0.4),
+            up: DVec3::Y,
+            fov: 50.0,
+        };
+        (ex, cam)
+    }
+
+    /// The frame drawn as `drawing` with `fill_px`, and the pixels filled without a ray.
+    fn render(ex: &mut Explorer, cam: &Camera, drawing: Drawing, fill_px: f64) -> (SvoImage, u64) {
+        ex.cfg.fill_px = fill_px;
+        // Every render tiled (from outside the root, renders alternate to compare).
+        ex.outside_tiles = OutsideTiles::default();
+        let ((img, reqs, counts), _) = ex.render_frame(cam, &DeepEye::of(cam), drawing, false);
+        ex.release_requests(&reqs);
+        assert_eq!(
+            counts[0] + ex.filled,
+            128 * 96,
+            "every pixel cast or filled"
+        );
+        (img, ex.filled)
+    }
+
+    #[test]
+    fn filled_pixels_show_what_their_rays_would() {
+        let (mut ex, cam) = menger_explorer();
+        // A few frames settled: voxels up to ~24 pixels wide.
+        ex.settle(&cam, 3);
+        let n = 128 * 96;
+        // Drawn as blocks, a filled pixel takes the voxel its lattice rays all met: the same
+        // colour and nearly the same depth as its own ray, but for what stands in front of
+        // that voxel between rays two pixels apart (here 1 pixel of 12288).
+        let (cast, none) = render(&mut ex, &cam, Drawing::Blocky, 0.0);
+        let (filled, count) = render(&mut ex, &cam, Drawing::Blocky, 4.0);
+        assert_eq!(none, 0);
+        assert!(count as usize > n / 5, "{count} of {n} pixels filled");
+        let differ = (0..n)
+            .filter(|&i| cast.colour[i] != filled.colour[i])
+            .count();
+        assert!(differ <= n / 200, "{differ} of {n} pixels differ");
+        let far = (0..n)
+            .filter(|&i| (cast.depth[i] - filled.depth[i]).abs() > 0.05 * cast.depth[i])
+            .count();
+        assert!(far <= n / 200, "{far} of {n} pixels have depths 5 % apart");
+        // Drawn smooth, neighbouring wide voxels of one surface blend too: more pixels are
+        // filled (5902 here) and the smoothed frame changes by half a level in 255.
+        let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0);
+        let (filled, more) = render(&mut ex, &cam, Drawing::Smooth, 4.0);
+        assert!(more > count, "{more} filled smooth, {count} as blocks");
+        let error = (0..n)
+            .map(|i| {
+                let (a, b) = (cast.colour[i].to_le_bytes(), filled.colour[i].to_le_bytes());
+                (0..3).map(|c| a[c].abs_diff(b[c]) as f64).sum::<f64>() / 3.0
+            })
+            .sum::<f64>()
+            / n as f64;
+        assert!(error < 2.0, "mean error {error} levels of 255");
+    }
+
+    #[test]
+    fn a_settled_frame_casts_every_pixel() {
+        let (mut ex, cam) = menger_explorer();
+        ex.settle(&cam, 400);
+        let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0);
+        let (filled, count) = render(&mut ex, &cam, Drawing::Smooth, 4.0);
+        assert!(cast.largest_voxel_px < 4.0, "{}", cast.largest_voxel_px);
+        assert_eq!(count, 0);
+        assert!(filled == cast);
     }
 }

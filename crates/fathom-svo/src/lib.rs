@@ -31,6 +31,7 @@ pub mod check;
 pub mod error;
 pub mod evict;
 pub mod explorer;
+pub mod fill;
 pub mod frustum;
 pub mod generate;
 pub mod node;

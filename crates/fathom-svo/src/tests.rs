@@ -11,11 +11,15 @@ use fathom_core::scene::Scene;
 use fathom_core::scenes;
 use glam::DVec3;
 
+/// Settings of these tests: every pixel casts its ray (`fill_px` 0), so renders with and
+/// without tile starts, and by either traversal, can be compared pixel for pixel (filling
+/// has tests of its own, `explorer::fill_tests`).
 fn cfg(w: u32, h: u32) -> ExplorerConfig {
     ExplorerConfig {
         width: w,
         height: h,
         threads: 2,
+        fill_px: 0.0,
         ..ExplorerConfig::default()
     }
 }

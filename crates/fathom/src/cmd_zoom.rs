@@ -143,6 +143,13 @@ pub struct ZoomArgs {
     /// Frames whose voxels are all narrower look the same either way.
     #[arg(long)]
     pub blocky: bool,
+    /// Rays are cast on a lattice (every other pixel of every other row) first; a pixel
+    /// between lattice rays that all met one voxel at least this many pixels wide takes its
+    /// colour without a ray of its own (0: every pixel casts its ray). What the zoom shows
+    /// while detail arrives is voxels several pixels wide, so most pixels are filled; settled
+    /// frames are unchanged. 0 or [2, 64].
+    #[arg(long, default_value_t = fathom_svo::fill::DEFAULT_FILL_PX)]
+    pub fill_px: f64,
     /// Before the first frame, refine the octree at the first camera for up to this many
     /// milliseconds, so the zoom opens on the scene instead of a few huge voxels (not
     /// counted in the frame times; written to --stats as warmup_ms), [0, 600000].
@@ -251,6 +258,7 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
                 planes: a.planes,
                 fovea: a.fovea,
                 smooth: !a.blocky,
+                fill_px: a.fill_px,
                 ..OctreeSettings::default()
             },
             ..RenderRequest::default()
