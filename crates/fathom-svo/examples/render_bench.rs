@@ -4,13 +4,19 @@
 //!
 //! `cargo run --release -p fathom-svo --example render_bench -- mandelbulb 300 1e11 [threads]
 //! [neighbour|kdrestart] [beam tile side, 0 for none] [finest beam tile side] [fovea]
-//! [smooth: 1 or 0]`
+//! [smooth: 1 or 0] [fill_px, or several comma-separated] [subdivisions a frame]`
 //!
 //! The fovea (default `request_order::DEFAULT_FOVEA`) decides which leaves the fixed number of
 //! subdivisions splits: 0 builds the trees of the builds before stop 37, whose checksums
 //! `docs/svo.md` records. Smoothing (default on, as in every front end; `crate::smooth`)
 //! changes the checksummed colours wherever a frame shows voxels two or more pixels wide: 0
 //! gives the checksums of the builds before stop 38.
+//!
+//! Pixel filling (`crate::fill`, default `fill::DEFAULT_FILL_PX`): with several values (e.g.
+//! `0,4`) each checkpoint's repeated renders take them in turn on the same frozen tree, and
+//! each value's times are reported; the tree is built with the first. The tree is built with
+//! 1700 subdivisions a frame by default, far finer than a zoom's frames (a few hundred a
+//! frame at the default 3 ms): pass a smaller count to time the coarse trees zooms show.
 
 use fathom_core::camera_path::path_preset;
 use fathom_svo::RootSpec;
@@ -28,6 +34,12 @@ fn main() {
         _ => Traversal::Neighbour,
     };
     let reps = 15;
+    let fills: Vec<f64> = args
+        .get(10)
+        .map(|s| s.split(',').filter_map(|v| v.parse().ok()).collect())
+        .filter(|v: &Vec<f64>| !v.is_empty())
+        .unwrap_or_else(|| vec![fathom_svo::fill::DEFAULT_FILL_PX]);
+    let subdivisions: usize = args.get(11).and_then(|s| s.parse().ok()).unwrap_or(1700);
     let p = path_preset(name).unwrap_or_else(|e| {
         eprintln!("render_bench: {e}");
         std::process::exit(2)
@@ -35,7 +47,7 @@ fn main() {
     let cfg = ExplorerConfig {
         threads,
         subdivide_ms: 0.0,
-        min_subdivisions: 1700,
+        min_subdivisions: subdivisions,
         root: RootSpec::from_cube(p.cube),
         traversal: trav,
         beam: args
@@ -51,42 +63,56 @@ fn main() {
             .and_then(|s| s.parse().ok())
             .unwrap_or(fathom_svo::request_order::DEFAULT_FOVEA),
         smooth: args.get(9).is_none_or(|s| s != "0"),
+        fill_px: fills[0],
         ..ExplorerConfig::default()
     };
     let mut ex = Explorer::new(&p.scene, cfg).unwrap();
     let checkpoints = [frames / 3, 2 * frames / 3, frames - 1];
-    let mut total_min = 0.0;
+    let mut total_min = vec![0.0; fills.len()];
     for i in 0..frames {
         let cam = p.camera(i, frames, depth);
         if checkpoints.contains(&i) {
-            let mut times = Vec::new();
-            let mut sum = 0u64;
-            let mut npr = 0.0;
-            let mut rays = 1u64;
+            let mut times = vec![Vec::new(); fills.len()];
+            let mut sums = vec![0u64; fills.len()];
+            let mut npr = vec![0.0; fills.len()];
+            let mut rays = vec![1u64; fills.len()];
+            let mut walks = vec![0u64; fills.len()];
             for _ in 0..reps {
-                let t0 = Instant::now();
-                let (img, reqs, c) = ex.render(&cam);
-                times.push(t0.elapsed().as_secs_f64() * 1e3);
-                ex.release_requests(&reqs);
-                npr = c[2] as f64 / c[0] as f64;
-                rays = c[0].max(1);
-                sum = img.colour.iter().zip(&img.depth).fold(0u64, |h, (&c, &d)| {
-                    (h ^ (c as u64) ^ ((d.to_bits() as u64) << 32)).wrapping_mul(0x100000001b3)
-                });
+                for (k, &fill) in fills.iter().enumerate() {
+                    ex.cfg.fill_px = fill;
+                    let t0 = Instant::now();
+                    let (img, reqs, c) = ex.render(&cam);
+                    times[k].push(t0.elapsed().as_secs_f64() * 1e3);
+                    ex.release_requests(&reqs);
+                    npr[k] = c[2] as f64 / c[0] as f64;
+                    rays[k] = c[0].max(1);
+                    walks[k] = ex.beam_steps();
+                    sums[k] = img.colour.iter().zip(&img.depth).fold(0u64, |h, (&c, &d)| {
+                        (h ^ (c as u64) ^ ((d.to_bits() as u64) << 32)).wrapping_mul(0x100000001b3)
+                    });
+                }
             }
-            times.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            total_min += times[0];
-            println!(
-                "{name} frame {i}: render min {:.2} ms median {:.2} ms, {npr:.2} nodes/ray \
-                 ({:.2} in tile walks, {} rays from the skip node), {} nodes, checksum {sum:016x}",
-                times[0],
-                times[reps / 2],
-                ex.beam_steps() as f64 / rays as f64,
-                ex.rays_from_skip(),
-                ex.tree.counts().nodes
-            );
+            ex.cfg.fill_px = fills[0];
+            for (k, &fill) in fills.iter().enumerate() {
+                let t = &mut times[k];
+                t.sort_by(|a, b| a.partial_cmp(b).unwrap());
+                total_min[k] += t[0];
+                println!(
+                    "{name} frame {i} fill {fill}: render min {:.2} ms median {:.2} ms, {:.2} \
+                     nodes/ray ({:.2} in tile walks), {} rays, {} nodes, checksum {:016x}",
+                    t[0],
+                    t[reps / 2],
+                    npr[k],
+                    walks[k] as f64 / rays[k] as f64,
+                    rays[k],
+                    ex.tree.counts().nodes,
+                    sums[k]
+                );
+            }
         }
         ex.step(&cam);
     }
-    println!("{name}: sum of min render ms {total_min:.2}");
+    for (fill, total) in fills.iter().zip(&total_min) {
+        println!("{name} fill {fill}: sum of min render ms {total:.2}");
+    }
 }
