@@ -945,16 +945,16 @@ impl Explorer {
                                 // lattice row its lattice rays first, then the pixels between.
                                 let nx = fill::lattice_len(n);
                                 lattice.clear();
-                                lattice.resize(nx * fill::lattice_len(rows), NO_HIT);
+                                lattice.resize(nx * fill::lattice_len(rows), Hit::miss(0));
                                 for j in fill::row_order(rows) {
                                     let y = y0 + j;
                                     let mut row = band.row(j);
                                     grid.span(y, x0, n, &mut span);
                                     let on_lattice = fill::lattice_index(rows, j);
+                                    let on = on_lattice.is_some();
                                     // Lattice rows above and below a row between them.
                                     let ky = on_lattice.unwrap_or(j / 2);
                                     for step in 0..n {
-                                        let on = on_lattice.is_some();
                                         let (i, shared) = fill::visit(
                                             &lattice, n, nx, on, ky, step, rule, fill_wide,
                                         );
@@ -962,7 +962,7 @@ impl Explorer {
                                             Some(hit) => (hit, true),
                                             None => (cast!(x0 + i, y, &span.ray(i, o, lod)), false),
                                         };
-                                        if on_lattice.is_some() && step < nx {
+                                        if on && step < nx {
                                             lattice[ky * nx + step] = hit;
                                         }
                                         let (x, d) = (x0 + i, span.dir(i));
@@ -1426,15 +1426,6 @@ impl PixelBand<'_> {
         }
     }
 }
-
-/// A lattice slot before its ray is cast ([`crate::fill`]).
-const NO_HIT: Hit = Hit {
-    t: f64::INFINITY,
-    colour: 0,
-    node: NONE,
-    steps: 0,
-    depth: 0,
-};
 
 fn median_hit(depth: &[f32], size: f64) -> f64 {
     let mut t: Vec<f32> = depth

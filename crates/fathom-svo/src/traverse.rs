@@ -70,7 +70,8 @@ pub struct Hit {
 }
 
 impl Hit {
-    fn miss(steps: u32) -> Hit {
+    /// A miss after `steps` (with 0, also a lattice slot before its ray is cast).
+    pub(crate) fn miss(steps: u32) -> Hit {
         Hit {
             t: f64::INFINITY,
             colour: 0,
