@@ -851,6 +851,19 @@ impl Explorer {
             ra.extend(rb);
             (ra, std::array::from_fn(|i| ca[i] + cb[i]), la.max(lb))
         };
+        let tiles = TileDrawing {
+            grid: &grid,
+            o,
+            lod,
+            rule,
+            wide: fill_wide,
+        };
+        let pixels = (
+            &mut colour[..],
+            &mut depth[..],
+            &mut half[..],
+            &mut marks[..],
+        );
         let (reqs, counts, largest) = self.pool.install(|| {
             if beams {
                 // Bands of `beam` rows, each cut into `beam`-wide tiles: a walk of the nodes
@@ -869,27 +882,15 @@ impl Explorer {
                 while fine.is_multiple_of(2) && fine / 2 >= self.cfg.beam_min as usize {
                     fine /= 2;
                 }
-                let band = beam * w as usize;
                 // With the eye outside the root the walks start at the root (no ray stops
                 // outside it).
                 let from = match skip {
                     Some(skip) => walk_root(tree, skip, o, reach),
                     None => (0, tree.root_box()),
                 };
-                colour
-                    .par_chunks_mut(band)
-                    .zip(depth.par_chunks_mut(band))
-                    .zip(half.par_chunks_mut(band))
-                    .zip(marks.par_chunks_mut(band))
+                bands(pixels, w as usize, beam)
                     .enumerate()
-                    .map(|(k, (((colour, depth), half), marks))| {
-                        let mut band = PixelBand {
-                            colour,
-                            depth,
-                            half,
-                            marks,
-                            width: w as usize,
-                        };
+                    .map(|(k, mut band)| {
                         let mut reqs = Vec::new();
                         let mut c = [0u64; 6];
                         let mut largest = 0f64;
@@ -915,98 +916,64 @@ impl Explorer {
                             c[2] += n;
                             c[3] += n;
                         }
-                        let mut span = RaySpan::default();
                         let mut path = StartPath::default();
-                        // A finest tile at a time, row by row inside it: its rays share a
-                        // start, so each keeps the previous ray's descent path
-                        // (`StartPath`); cast row by row across the band, every `fine`th
-                        // ray began a fresh descent at a tile boundary.
-                        let wu = w as usize;
-                        let rows = y1 - y0 + 1;
-                        // The hits of a tile's lattice rays ([`crate::fill`]).
-                        let mut lattice: Vec<Hit> = Vec::new();
-                        // Pixel ray `r` of (`x`, `y`) from its tile's start, or from the skip
-                        // node when the start does not serve it.
-                        macro_rules! cast {
-                            ($x:expr, $y:expr, $r:expr) => {
-                                starts
-                                    .at($x, $y)
-                                    .and_then(|s| cast_at(tree, $r, &s, &mut path, &mut reqs))
-                                    .unwrap_or_else(|| {
-                                        c[4] += 1;
-                                        cast_neighbour(tree, $r, skip, &mut entry, &mut reqs)
-                                    })
-                            };
+                        let mut scratch = TileScratch::default();
+                        // A finest tile at a time, row by row inside it (or its lattice first,
+                        // `crate::fill`): its rays share a start, so each keeps the previous
+                        // ray's descent path (`StartPath`); cast row by row across the band,
+                        // every `fine`th ray began a fresh descent at a tile boundary.
+                        let mut from_skip = 0;
+                        for x0 in (0..w as usize).step_by(fine) {
+                            tiles.draw(
+                                &mut band,
+                                (x0, y0, fine),
+                                &mut scratch,
+                                |x, y, r| {
+                                    starts
+                                        .at(x, y)
+                                        .and_then(|s| cast_at(tree, r, &s, &mut path, &mut reqs))
+                                        .unwrap_or_else(|| {
+                                            from_skip += 1;
+                                            cast_neighbour(tree, r, skip, &mut entry, &mut reqs)
+                                        })
+                                },
+                                |x, d, hit, row, filled| {
+                                    put(x, d, hit, row, &mut c, &mut largest, filled)
+                                },
+                            );
                         }
-                        for x0 in (0..wu).step_by(fine) {
-                            let n = fine.min(wu - x0);
-                            if fill_wide.is_finite() && n <= SPAN {
-                                // The lattice's rows first, then the rows between; on a
-                                // lattice row its lattice rays first, then the pixels between.
-                                let nx = fill::lattice_len(n);
-                                lattice.clear();
-                                lattice.resize(nx * fill::lattice_len(rows), Hit::miss(0));
-                                for j in fill::row_order(rows) {
-                                    let y = y0 + j;
-                                    let mut row = band.row(j);
-                                    grid.span(y, x0, n, &mut span);
-                                    let on_lattice = fill::lattice_index(rows, j);
-                                    let on = on_lattice.is_some();
-                                    // Lattice rows above and below a row between them.
-                                    let ky = on_lattice.unwrap_or(j / 2);
-                                    for step in 0..n {
-                                        let (i, shared) = fill::visit(
-                                            &lattice, n, nx, on, ky, step, rule, fill_wide,
-                                        );
-                                        let (hit, filled) = match shared {
-                                            Some(hit) => (hit, true),
-                                            None => (cast!(x0 + i, y, &span.ray(i, o, lod)), false),
-                                        };
-                                        if on && step < nx {
-                                            lattice[ky * nx + step] = hit;
-                                        }
-                                        let (x, d) = (x0 + i, span.dir(i));
-                                        put(x, d, hit, &mut row, &mut c, &mut largest, filled);
-                                    }
-                                }
-                                continue;
-                            }
-                            for j in 0..rows {
-                                let y = y0 + j;
-                                let mut row = band.row(j);
-                                grid.segment(y, x0, n, o, lod, &mut span, |x, d, r| {
-                                    let hit = cast!(x, y, r);
-                                    put(x, d, hit, &mut row, &mut c, &mut largest, false);
-                                });
-                            }
-                        }
+                        c[4] += from_skip;
                         (reqs, c, largest)
                     })
                     .reduce(|| (Vec::new(), [0u64; 6], 0f64), reduce)
             } else {
-                colour
-                    .par_chunks_mut(w as usize)
-                    .zip(depth.par_chunks_mut(w as usize))
-                    .zip(half.par_chunks_mut(w as usize))
-                    .zip(marks.par_chunks_mut(w as usize))
+                // Without tile starts: bands of rows cast left to right, or, when pixels are
+                // filled, cut into tiles of `fill::TILE` pixels.
+                let (side, across) = if tiles.fills() {
+                    (fill::TILE, fill::TILE)
+                } else {
+                    (1, w as usize)
+                };
+                bands(pixels, w as usize, side)
                     .enumerate()
-                    .map(|(y, (((colour, depth), half), marks))| {
-                        let mut row = PixelRow {
-                            colour,
-                            depth,
-                            half,
-                            marks,
-                        };
+                    .map(|(k, mut band)| {
                         let mut reqs = Vec::new();
                         let mut c = [0u64; 6];
                         let mut largest = 0f64;
-                        // Where the previous ray of this row entered the root (eye outside).
+                        // Where the previous ray of this band entered the root (eye outside).
                         let mut entry = None;
-                        let mut span = RaySpan::default();
-                        grid.row(y, o, lod, &mut span, |x, d, r| {
-                            let hit = cast(tree, r, skip, &mut entry, trav, &mut reqs);
-                            put(x, d, hit, &mut row, &mut c, &mut largest, false);
-                        });
+                        let mut scratch = TileScratch::default();
+                        for x0 in (0..w as usize).step_by(across) {
+                            tiles.draw(
+                                &mut band,
+                                (x0, k * side, across),
+                                &mut scratch,
+                                |_, _, r| cast(tree, r, skip, &mut entry, trav, &mut reqs),
+                                |x, d, hit, row, filled| {
+                                    put(x, d, hit, row, &mut c, &mut largest, filled)
+                                },
+                            );
+                        }
                         (reqs, c, largest)
                     })
                     .reduce(|| (Vec::new(), [0u64; 6], 0f64), reduce)
@@ -1427,6 +1394,102 @@ impl PixelBand<'_> {
     }
 }
 
+/// `rows`-row bands of a frame's per-pixel buffers (colour, depth, smoothing half-widths and
+/// marks), `width` pixels a row, for the threads.
+fn bands<'a>(
+    (colour, depth, half, marks): (&'a mut [u32], &'a mut [f32], &'a mut [u8], &'a mut [u8]),
+    width: usize,
+    rows: usize,
+) -> impl IndexedParallelIterator<Item = PixelBand<'a>> {
+    let n = rows * width;
+    colour
+        .par_chunks_mut(n)
+        .zip(depth.par_chunks_mut(n))
+        .zip(half.par_chunks_mut(n))
+        .zip(marks.par_chunks_mut(n))
+        .map(move |(((colour, depth), half), marks)| PixelBand {
+            colour,
+            depth,
+            half,
+            marks,
+            width,
+        })
+}
+
+/// How a render draws a tile of pixels: its rays' directions and origin, and the rule that
+/// fills pixels between lattice rays ([`crate::fill`]; `wide` infinite: every pixel cast).
+struct TileDrawing<'a> {
+    grid: &'a RayGrid,
+    o: [f64; 3],
+    lod: f64,
+    rule: fill::Rule,
+    wide: f64,
+}
+
+/// A thread's scratch for [`TileDrawing::draw`], kept across its tiles.
+#[derive(Default)]
+struct TileScratch {
+    span: RaySpan,
+    /// The hits of a tile's lattice rays.
+    lattice: Vec<Hit>,
+}
+
+impl TileDrawing<'_> {
+    /// Whether pixels between lattice rays may be filled.
+    fn fills(&self) -> bool {
+        self.wide.is_finite()
+    }
+
+    /// Draws columns `x0..x0 + n` (fewer at the right edge) of every row of `band`, which
+    /// holds the frame's rows from `y0`: each pixel's hit is its ray's, `cast(x, y, ray)`,
+    /// or, when the tile fills and is at most [`SPAN`] wide, filled from the lattice rays
+    /// around it; `put(x, d, hit, row, filled)` writes it.
+    #[inline(always)]
+    fn draw(
+        &self,
+        band: &mut PixelBand,
+        (x0, y0, n): (usize, usize, usize),
+        s: &mut TileScratch,
+        mut cast: impl FnMut(usize, usize, &Ray) -> Hit,
+        mut put: impl FnMut(usize, DVec3, Hit, &mut PixelRow, bool),
+    ) {
+        let n = n.min(band.width - x0);
+        let rows = band.rows();
+        if self.fills() && n <= SPAN {
+            let mut at = usize::MAX;
+            fill::tile(
+                &mut s.lattice,
+                n,
+                rows,
+                self.rule,
+                self.wide,
+                |j, i, filled| {
+                    let y = y0 + j;
+                    if j != at {
+                        self.grid.span(y, x0, n, &mut s.span);
+                        at = j;
+                    }
+                    let x = x0 + i;
+                    let hit =
+                        filled.unwrap_or_else(|| cast(x, y, &s.span.ray(i, self.o, self.lod)));
+                    put(x, s.span.dir(i), hit, &mut band.row(j), filled.is_some());
+                    hit
+                },
+            );
+            return;
+        }
+        for j in 0..rows {
+            let y = y0 + j;
+            let mut row = band.row(j);
+            self.grid
+                .segment(y, x0, n, self.o, self.lod, &mut s.span, |x, d, r| {
+                    let hit = cast(x, y, r);
+                    put(x, d, hit, &mut row, false);
+                });
+        }
+    }
+}
+
 fn median_hit(depth: &[f32], size: f64) -> f64 {
     let mut t: Vec<f32> = depth
         .iter()
@@ -1789,11 +1852,21 @@ mod fill_tests {
         (ex, cam)
     }
 
-    /// The frame drawn as `drawing` with `fill_px`, and the pixels filled without a ray.
-    fn render(ex: &mut Explorer, cam: &Camera, drawing: Drawing, fill_px: f64) -> (SvoImage, u64) {
+    /// The frame drawn as `drawing` with `fill_px`, with tile starts or without (`tiled`),
+    /// and the pixels filled without a ray.
+    fn render(
+        ex: &mut Explorer,
+        cam: &Camera,
+        drawing: Drawing,
+        fill_px: f64,
+        tiled: bool,
+    ) -> (SvoImage, u64) {
         ex.cfg.fill_px = fill_px;
-        // Every render tiled (from outside the root, renders alternate to compare).
-        ex.outside_tiles = OutsideTiles::default();
+        // From outside the root (as here) renders may alternate to compare: fix the choice.
+        ex.outside_tiles = OutsideTiles {
+            from: if tiled { 0 } else { u64::MAX },
+            ..OutsideTiles::default()
+        };
         let ((img, reqs, counts), _) = ex.render_frame(cam, &DeepEye::of(cam), drawing, false);
         ex.release_requests(&reqs);
         assert_eq!(
@@ -1801,6 +1874,7 @@ mod fill_tests {
             128 * 96,
             "every pixel cast or filled"
         );
+        assert_eq!(ex.beam_steps > 0, tiled, "tile starts used");
         (img, ex.filled)
     }
 
@@ -1810,44 +1884,54 @@ mod fill_tests {
         // A few frames settled: voxels up to ~24 pixels wide.
         ex.settle(&cam, 3);
         let n = 128 * 96;
-        // Drawn as blocks, a filled pixel takes the voxel its lattice rays all met: the same
-        // colour and nearly the same depth as its own ray, but for what stands in front of
-        // that voxel between rays two pixels apart (here 1 pixel of 12288).
-        let (cast, none) = render(&mut ex, &cam, Drawing::Blocky, 0.0);
-        let (filled, count) = render(&mut ex, &cam, Drawing::Blocky, 4.0);
-        assert_eq!(none, 0);
-        assert!(count as usize > n / 5, "{count} of {n} pixels filled");
-        let differ = (0..n)
-            .filter(|&i| cast.colour[i] != filled.colour[i])
-            .count();
-        assert!(differ <= n / 200, "{differ} of {n} pixels differ");
-        let far = (0..n)
-            .filter(|&i| (cast.depth[i] - filled.depth[i]).abs() > 0.05 * cast.depth[i])
-            .count();
-        assert!(far <= n / 200, "{far} of {n} pixels have depths 5 % apart");
-        // Drawn smooth, neighbouring wide voxels of one surface blend too: more pixels are
-        // filled (5902 here) and the smoothed frame changes by half a level in 255.
-        let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0);
-        let (filled, more) = render(&mut ex, &cam, Drawing::Smooth, 4.0);
-        assert!(more > count, "{more} filled smooth, {count} as blocks");
-        let error = (0..n)
-            .map(|i| {
-                let (a, b) = (cast.colour[i].to_le_bytes(), filled.colour[i].to_le_bytes());
-                (0..3).map(|c| a[c].abs_diff(b[c]) as f64).sum::<f64>() / 3.0
-            })
-            .sum::<f64>()
-            / n as f64;
-        assert!(error < 2.0, "mean error {error} levels of 255");
+        // With tile starts and without (their lattices' tiles differ: the finest tiles, or
+        // `fill::TILE` squares).
+        for tiled in [true, false] {
+            // Drawn as blocks, a filled pixel takes the voxel its lattice rays all met: the
+            // same colour and nearly the same depth as its own ray, but for what stands in
+            // front of that voxel between rays two pixels apart (here 1 pixel of 12288).
+            let (cast, none) = render(&mut ex, &cam, Drawing::Blocky, 0.0, tiled);
+            let (filled, count) = render(&mut ex, &cam, Drawing::Blocky, 4.0, tiled);
+            assert_eq!(none, 0);
+            assert!(count as usize > n / 5, "{count} of {n} pixels filled");
+            let differ = (0..n)
+                .filter(|&i| cast.colour[i] != filled.colour[i])
+                .count();
+            assert!(differ <= n / 200, "{differ} of {n} pixels differ");
+            let far = (0..n)
+                .filter(|&i| (cast.depth[i] - filled.depth[i]).abs() > 0.05 * cast.depth[i])
+                .count();
+            assert!(far <= n / 200, "{far} of {n} pixels have depths 5 % apart");
+            // Drawn smooth, neighbouring wide voxels of one surface blend too: more pixels
+            // are filled (5902 here with tile starts) and the smoothed frame changes by half a
+            // level in 255.
+            let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0, tiled);
+            let (filled, more) = render(&mut ex, &cam, Drawing::Smooth, 4.0, tiled);
+            assert!(more > count, "{more} filled smooth, {count} as blocks");
+            let error = (0..n)
+                .map(|i| {
+                    let (a, b) = (cast.colour[i].to_le_bytes(), filled.colour[i].to_le_bytes());
+                    (0..3).map(|c| a[c].abs_diff(b[c]) as f64).sum::<f64>() / 3.0
+                })
+                .sum::<f64>()
+                / n as f64;
+            assert!(
+                error < 2.0,
+                "tiled {tiled}: mean error {error} levels of 255"
+            );
+        }
     }
 
     #[test]
     fn a_settled_frame_casts_every_pixel() {
         let (mut ex, cam) = menger_explorer();
         ex.settle(&cam, 400);
-        let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0);
-        let (filled, count) = render(&mut ex, &cam, Drawing::Smooth, 4.0);
-        assert!(cast.largest_voxel_px < 4.0, "{}", cast.largest_voxel_px);
-        assert_eq!(count, 0);
-        assert!(filled == cast);
+        for tiled in [true, false] {
+            let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0, tiled);
+            let (filled, count) = render(&mut ex, &cam, Drawing::Smooth, 4.0, tiled);
+            assert!(cast.largest_voxel_px < 4.0, "{}", cast.largest_voxel_px);
+            assert_eq!(count, 0);
+            assert!(filled == cast);
+        }
     }
 }

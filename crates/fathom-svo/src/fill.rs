@@ -8,7 +8,9 @@
 //! row, and the tile's last row and column); a pixel between two (on a lattice row or column)
 //! or four lattice rays that all stopped on the same voxel, at least [`ExplorerConfig::fill_px`]
 //! pixels wide at each, takes that voxel's colour and the lattice rays' mean distance without
-//! a ray of its own. Any other pixel casts its ray.
+//! a ray of its own. Any other pixel casts its ray. Renders with tile starts take their finest
+//! tiles as the lattice's tiles; renders without them (the eye outside the root while tile
+//! starts do not pay, or the kd-restart traversal) cut the frame into [`TILE`]-pixel squares.
 //!
 //! In frames drawn smooth the rule is wider ([`blended`]): lattice rays that met different
 //! voxels, all that wide and at distances no further apart than the smallest one's side (one
@@ -34,6 +36,10 @@ use crate::traverse::Hit;
 /// Default [`crate::explorer::ExplorerConfig::fill_px`]: pixels between lattice rays (two
 /// pixels apart) are filled when the voxel they met is at least twice that wide.
 pub const DEFAULT_FILL_PX: f64 = 4.0;
+
+/// Side of the square tiles a render without tile starts casts its lattices in (renders with
+/// tile starts use their finest tiles, [`crate::explorer::DEFAULT_BEAM_MIN`] by default).
+pub const TILE: usize = 16;
 
 /// Lattice points in a run of `n` pixels (`n` >= 1): offsets 0, 2, 4, ... and the last.
 #[inline(always)]
@@ -186,6 +192,38 @@ pub fn visit(
     (step, hit)
 }
 
+/// Visits each pixel of a tile `n` pixels wide and `rows` high once, the lattice points
+/// before the pixels between them ([`row_order`], [`visit`]): `pixel(j, i, filled)` gets the
+/// pixel's row and offset in the tile and the hit `rule` fills it with, if any, and returns
+/// the pixel's hit (`filled`'s, or its ray's); lattice points' hits are kept in `lattice` for
+/// the pixels between them.
+#[inline(always)]
+pub fn tile(
+    lattice: &mut Vec<Hit>,
+    n: usize,
+    rows: usize,
+    rule: Rule,
+    wide: f64,
+    mut pixel: impl FnMut(usize, usize, Option<Hit>) -> Hit,
+) {
+    let nx = lattice_len(n);
+    lattice.clear();
+    lattice.resize(nx * lattice_len(rows), Hit::miss(0));
+    for j in row_order(rows) {
+        let on_lattice = lattice_index(rows, j);
+        let on = on_lattice.is_some();
+        // A row between lattice rows sits between rows `j / 2` and `j / 2 + 1`.
+        let ky = on_lattice.unwrap_or(j / 2);
+        for step in 0..n {
+            let (i, filled) = visit(lattice, n, nx, on, ky, step, rule, wide);
+            let hit = pixel(j, i, filled);
+            if on && step < nx {
+                lattice[ky * nx + step] = hit;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -220,6 +258,34 @@ mod tests {
                 }
             }
             assert!(seen.iter().all(|&s| s), "{n} x {rows}: a pixel not visited");
+        }
+    }
+
+    #[test]
+    fn a_tile_casts_its_lattice_and_fills_between_rays_on_one_wide_voxel() {
+        let mut lattice = Vec::new();
+        for (n, rows) in [(16, 16), (16, 5), (7, 1), (1, 4), (9, 3)] {
+            // Every ray meets voxel 1 (wide) but the lattice ray of pixel (4, 2), which meets
+            // voxel 2: the pixels next to it (between it and other lattice rays) cast theirs.
+            let odd = (4, 2);
+            let mut cast = vec![0u8; n * rows];
+            tile(&mut lattice, n, rows, Rule::Shared, 0.01, |j, i, filled| {
+                let own = if (i, j) == odd { 2 } else { 1 };
+                if filled.is_none() {
+                    cast[j * n + i] += 1;
+                    return hit(own, 4, 1.0);
+                }
+                assert_eq!(filled.unwrap().node, own, "({i}, {j}) of {n} x {rows}");
+                filled.unwrap()
+            });
+            for j in 0..rows {
+                for i in 0..n {
+                    let point = lattice_index(n, i).is_some() && lattice_index(rows, j).is_some();
+                    let near = i.abs_diff(odd.0) <= 1 && j.abs_diff(odd.1) <= 1;
+                    let want = u8::from(point || (near && n > odd.0 && rows > odd.1));
+                    assert_eq!(cast[j * n + i], want, "({i}, {j}) of {n} x {rows}");
+                }
+            }
         }
     }
 
