@@ -103,8 +103,8 @@ pub struct ExplorerConfig {
     /// all narrower (settled frames at fidelity below 2) are unchanged.
     pub smooth: bool,
     /// Pixels between rays that all met one voxel at least this many pixels wide take that
-    /// voxel's colour without a ray of their own ([`crate::fill`]; tiled renders of frames to
-    /// be seen; 0: every pixel casts), 0 or [2, 64].
+    /// voxel's colour without a ray of their own ([`crate::fill`]; frames to be seen, not
+    /// probes; 0: every pixel casts), 0 or [2, 64].
     pub fill_px: f64,
 }
 
@@ -1881,19 +1881,22 @@ mod fill_tests {
     #[test]
     fn filled_pixels_show_what_their_rays_would() {
         let (mut ex, cam) = menger_explorer();
-        // A few frames settled: voxels up to ~24 pixels wide.
-        ex.settle(&cam, 3);
+        // Five frames settled: voxels up to ~10 pixels wide, most narrower than 4.
+        ex.settle(&cam, 5);
         let n = 128 * 96;
-        // With tile starts and without (their lattices' tiles differ: the finest tiles, or
-        // `fill::TILE` squares).
-        for tiled in [true, false] {
+        let mut filled_at = Vec::new();
+        // With tile starts and without (their lattices' tiles differ in general: the finest
+        // tiles, or `fill::TILE` squares), filling from voxels at least 4 pixels wide or 2.
+        for (tiled, px) in [(true, 4.0), (false, 4.0), (true, 2.0), (false, 2.0)] {
             // Drawn as blocks, a filled pixel takes the voxel its lattice rays all met: the
             // same colour and nearly the same depth as its own ray, but for what stands in
-            // front of that voxel between rays two pixels apart (here 1 pixel of 12288).
+            // front of that voxel between rays two pixels apart (here 1 pixel of 12288 at 4
+            // pixels, 8 at 2).
             let (cast, none) = render(&mut ex, &cam, Drawing::Blocky, 0.0, tiled);
-            let (filled, count) = render(&mut ex, &cam, Drawing::Blocky, 4.0, tiled);
+            let (filled, count) = render(&mut ex, &cam, Drawing::Blocky, px, tiled);
             assert_eq!(none, 0);
-            assert!(count as usize > n / 5, "{count} of {n} pixels filled");
+            assert!(count as usize > n / 25, "{count} of {n} pixels filled");
+            filled_at.push(count);
             let differ = (0..n)
                 .filter(|&i| cast.colour[i] != filled.colour[i])
                 .count();
@@ -1903,10 +1906,10 @@ mod fill_tests {
                 .count();
             assert!(far <= n / 200, "{far} of {n} pixels have depths 5 % apart");
             // Drawn smooth, neighbouring wide voxels of one surface blend too: more pixels
-            // are filled (5902 here with tile starts) and the smoothed frame changes by half a
-            // level in 255.
+            // are filled (1438 here at 4 pixels, 2992 at 2) and the smoothed frame changes by
+            // a third of a level in 255 (a level at 2 pixels).
             let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0, tiled);
-            let (filled, more) = render(&mut ex, &cam, Drawing::Smooth, 4.0, tiled);
+            let (filled, more) = render(&mut ex, &cam, Drawing::Smooth, px, tiled);
             assert!(more > count, "{more} filled smooth, {count} as blocks");
             let error = (0..n)
                 .map(|i| {
@@ -1915,11 +1918,10 @@ mod fill_tests {
                 })
                 .sum::<f64>()
                 / n as f64;
-            assert!(
-                error < 2.0,
-                "tiled {tiled}: mean error {error} levels of 255"
-            );
+            assert!(error < 2.0, "{px} px: mean error {error} levels of 255");
         }
+        // Voxels 2 to 4 pixels wide fill too at 2 (510 pixels at 4, 854 at 2).
+        assert!(filled_at[2] > filled_at[0], "{filled_at:?}");
     }
 
     #[test]
@@ -1928,8 +1930,9 @@ mod fill_tests {
         ex.settle(&cam, 400);
         for tiled in [true, false] {
             let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0, tiled);
-            let (filled, count) = render(&mut ex, &cam, Drawing::Smooth, 4.0, tiled);
-            assert!(cast.largest_voxel_px < 4.0, "{}", cast.largest_voxel_px);
+            let px = fill::DEFAULT_FILL_PX;
+            let (filled, count) = render(&mut ex, &cam, Drawing::Smooth, px, tiled);
+            assert!(cast.largest_voxel_px < px, "{}", cast.largest_voxel_px);
             assert_eq!(count, 0);
             assert!(filled == cast);
         }

@@ -15,8 +15,8 @@
 //! In frames drawn smooth the rule is wider ([`blended`]): lattice rays that met different
 //! voxels, all that wide and at distances no further apart than the smallest one's side (one
 //! surface, not an edge), give the pixels between them their mean colour and distance. The
-//! smoothing that follows averages those pixels over boxes at least five pixels across, so it
-//! blends the colours of neighbouring voxels anyway.
+//! smoothing that follows averages those pixels over boxes about as wide as their voxels (at
+//! least three pixels across), so it blends the colours of neighbouring voxels anyway.
 //!
 //! What a filled pixel shows is what its ray would have met unless something smaller than the
 //! lattice's two-pixel spacing stands in front of that voxel: the part of a voxel a ray stops
@@ -34,8 +34,11 @@ use crate::octree::dim_at;
 use crate::traverse::Hit;
 
 /// Default [`crate::explorer::ExplorerConfig::fill_px`]: pixels between lattice rays (two
-/// pixels apart) are filled when the voxel they met is at least twice that wide.
-pub const DEFAULT_FILL_PX: f64 = 4.0;
+/// pixels apart) are filled when the voxels they met are at least that wide. Zooms to 1e15
+/// (1000 frames, every 50th compared with the sphere tracer) showed the same median SSIM at 2
+/// as at 4 (Mandelbulb 0.813 and 0.815, Menger 0.605 and 0.607; 0.811 and 0.604 with every
+/// pixel cast) and ran faster at 2 (Mandelbulb 46.6 fps against 42.0-42.8; stop 44).
+pub const DEFAULT_FILL_PX: f64 = 2.0;
 
 /// Side of the square tiles a render without tile starts casts its lattices in (renders with
 /// tile starts use their finest tiles, [`crate::explorer::DEFAULT_BEAM_MIN`] by default).
