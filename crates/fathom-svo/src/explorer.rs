@@ -840,7 +840,7 @@ impl Explorer {
                     row.marks[x] = 1;
                 }
                 row.colour[x] = hit.colour;
-                row.depth[x] = (hit.t * size) as f32;
+                row.depth[x] = (hit.drawn * size) as f32;
             } else {
                 row.colour[x] = sky_colour(&frame, d, sky);
                 row.depth[x] = f32::INFINITY;

@@ -14,7 +14,7 @@
 //!
 //! In frames drawn smooth the rule is wider ([`blended`]): lattice rays that met different
 //! voxels, all that wide and at distances no further apart than the smallest one's side (one
-//! surface, not an edge), give the pixels between them their mean colour and distance. The
+//! surface, not an edge), give the pixels between them their mean colour and distances. The
 //! smoothing that follows averages those pixels over boxes about as wide as their voxels (at
 //! least three pixels across), so it blends the colours of neighbouring voxels anyway.
 //!
@@ -71,7 +71,8 @@ pub fn lattice_offset(n: usize, k: usize) -> usize {
 
 /// The hit a pixel between the lattice rays `hits` takes: when they all stopped on one voxel
 /// whose side is at least `wide` times each one's distance (side over distance: its angular
-/// width), that voxel with the rays' mean distance and no steps of its own; else `None`.
+/// width), that voxel with the rays' mean distances (met and drawn) and no steps of its own;
+/// else `None`.
 #[inline(always)]
 pub fn shared(hits: &[Hit], wide: f64) -> Option<Hit> {
     let first = hits[0];
@@ -79,15 +80,18 @@ pub fn shared(hits: &[Hit], wide: f64) -> Option<Hit> {
         return None;
     }
     let side = dim_at(first.depth);
-    let mut t = 0.0;
+    let (mut t, mut drawn) = (0.0, 0.0);
     for h in hits {
         if h.node != first.node || side < wide * h.t {
             return None;
         }
         t += h.t;
+        drawn += h.drawn;
     }
+    let n = hits.len() as f64;
     Some(Hit {
-        t: t / hits.len() as f64,
+        t: t / n,
+        drawn: drawn / n,
         steps: 0,
         ..first
     })
@@ -96,14 +100,14 @@ pub fn shared(hits: &[Hit], wide: f64) -> Option<Hit> {
 /// The hit a pixel between the lattice rays `hits` (two or four) takes in a frame drawn
 /// smooth: when each stopped on a voxel whose side is at least `wide` times its distance, and
 /// their distances differ by no more than the smallest of those voxels' sides (one surface,
-/// not an edge in front of another), their mean colour and distance, with the smallest voxel's
+/// not an edge in front of another), their mean colour and distances, with the smallest voxel's
 /// depth (so the pixel is smoothed no wider than its narrowest neighbour); else `None`. Over
 /// pixels of voxels this wide the smoothing filter averages boxes at least five pixels across
 /// ([`crate::smooth`]), so the colours of voxels next to each other are blended anyway.
 #[inline(always)]
 pub fn blended(hits: &[Hit], wide: f64) -> Option<Hit> {
     let mut sums = [0u32; 4];
-    let (mut t, mut t_min, mut t_max, mut depth) = (0.0, f64::INFINITY, 0f64, 0u8);
+    let (mut t, mut drawn, mut t_min, mut t_max, mut depth) = (0.0, 0.0, f64::INFINITY, 0f64, 0u8);
     for h in hits {
         if h.node == NONE || dim_at(h.depth) < wide * h.t {
             return None;
@@ -112,6 +116,7 @@ pub fn blended(hits: &[Hit], wide: f64) -> Option<Hit> {
             *s += u32::from(b);
         }
         t += h.t;
+        drawn += h.drawn;
         t_min = t_min.min(h.t);
         t_max = t_max.max(h.t);
         depth = depth.max(h.depth);
@@ -123,6 +128,7 @@ pub fn blended(hits: &[Hit], wide: f64) -> Option<Hit> {
     let colour = u32::from_le_bytes(sums.map(|s| ((s + n / 2) / n) as u8));
     Some(Hit {
         t: t / n as f64,
+        drawn: drawn / n as f64,
         colour,
         node: hits[0].node,
         steps: 0,
@@ -316,6 +322,7 @@ mod tests {
     fn hit(node: u32, depth: u8, t: f64) -> Hit {
         Hit {
             t,
+            drawn: t,
             colour: 0xff336699,
             node,
             steps: 7,
@@ -330,6 +337,16 @@ mod tests {
         let h = shared(&[hit(9, 4, 1.0), hit(9, 4, 1.2)], wide).unwrap();
         assert_eq!((h.node, h.colour, h.depth, h.steps), (9, 0xff336699, 4, 0));
         assert!((h.t - 1.1).abs() < 1e-12);
+        // Drawn at the mean of where the rays reached the voxel's plane, sized by where
+        // they met it.
+        let far = |t: f64, drawn: f64| Hit {
+            drawn,
+            ..hit(9, 4, t)
+        };
+        let h = shared(&[far(1.0, 1.1), far(1.2, 1.5)], wide).unwrap();
+        assert!((h.t - 1.1).abs() < 1e-12 && (h.drawn - 1.3).abs() < 1e-12);
+        let h = blended(&[far(1.0, 1.1), far(1.02, 1.5)], wide).unwrap();
+        assert!((h.t - 1.01).abs() < 1e-12 && (h.drawn - 1.3).abs() < 1e-12);
         // Another voxel, a miss, or one ray too far for the voxel to be wide: cast.
         assert!(shared(&[hit(9, 4, 1.0), hit(10, 4, 1.0)], wide).is_none());
         assert!(

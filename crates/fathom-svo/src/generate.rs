@@ -404,7 +404,7 @@ impl Shader {
         let plane = match found {
             Some(SightHit {
                 behind: Some(dir), ..
-            }) => SurfacePlane::behind(-dir),
+            }) => SurfacePlane::behind(g, -dir, p, c, h),
             Some(_) => SurfacePlane::new(g, p, c, h),
             None => SurfacePlane::NONE,
         };

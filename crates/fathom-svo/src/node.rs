@@ -13,11 +13,10 @@
 //! | `parent`     | 4     | recombination, ascent during traversal and skip-node updates  |
 //! | `brick`      | 4     | id of the brick representative (nearest brick ancestor)       |
 //! | `colour`     | 4     | RGBA8; inner nodes hold the average of their full children   |
-//! | `plane`      | 4     | a full leaf's surface plane ([`SurfacePlane`]), drawn when wide |
+//! | `plane`      | 5     | a full leaf's surface plane ([`SurfacePlane`]), drawn when wide |
 //! | `depth`      | 1     | level below the root (box size is `2^-depth` of the root)     |
 //! | `flags`      | 1     | empty / requested / visited / free                            |
 //! | `idle`       | 1     | unifications a brick has gone unvisited (unloaded at a limit) |
-//! | padding      | 1     |                                                               |
 //!
 //! The dissertation's Java node was 26 bytes of fields (plus JVM headers and one object per
 //! child array); positions are not stored: boxes are recomputed exactly from the depth during
@@ -66,7 +65,6 @@ pub struct Node {
     /// Brick representatives: unifications in a row that found the brick unvisited (see
     /// [`crate::evict::unify`]); changed only between render phases.
     pub idle: u8,
-    _pad: [u8; 1],
 }
 
 impl Node {
@@ -82,7 +80,6 @@ impl Node {
             depth: 0,
             flags: AtomicU8::new(FREE),
             idle: 0,
-            _pad: [0; 1],
         }
     }
 

@@ -482,10 +482,12 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
 #[test]
 fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
     // Early in a zoom most leaves are wider than a pixel. On one coarse tree (a dozen frames
-    // of 50 subdivisions at a view of the Mandelbulb zoom), the same leaves drawn as
-    // cubes and drawn with their surface planes, against the depths of a settled tree (every
-    // visible leaf at most a pixel: planes unused). The planes' depths must lie much closer,
-    // the silhouette must not get worse, and both traversals must give identical images.
+    // of 50 subdivisions at a view of the Mandelbulb zoom), the same leaves drawn as plain
+    // cubes (no planes), as cubes at their planes' depth (the default) and cut by their
+    // surface planes (`--planes`), against the depths of a settled tree (every visible leaf
+    // at most a pixel: planes unused). Both uses of the planes must lie much closer than the
+    // cubes' faces; the planes' silhouette must not be worse than the cubes', the depths alone
+    // must leave it as it is, and both traversals must give identical images.
     let p = path_preset("mandelbulb").unwrap();
     let (w, h) = (80u32, 60u32);
     let mut c = cfg(w, h);
@@ -534,11 +536,22 @@ fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
         beamed_steps < plain_steps,
         "{beamed_steps} vs {plain_steps} steps"
     );
-    let mut err = [Vec::new(), Vec::new()];
-    let mut union_inter = [[0usize; 2]; 2];
+    // The same leaves without their planes: drawn at the cubes' faces.
+    for n in ex.tree.nodes.iter_mut() {
+        n.plane = crate::plane::SurfacePlane::NONE;
+    }
+    ex.tree.plane_px = f64::INFINITY;
+    let faces = render_with(&mut ex, &cam, Traversal::Neighbour);
+    assert_eq!(
+        faces.mask(),
+        cubes.mask(),
+        "the planes' depths changed the silhouette"
+    );
+    let mut err = [Vec::new(), Vec::new(), Vec::new()];
+    let mut union_inter = [[0usize; 2]; 3];
     for (i, &t) in want.depth.iter().enumerate() {
         let want_hit = t.is_finite();
-        for (k, img) in [&cubes, &planes].into_iter().enumerate() {
+        for (k, img) in [&faces, &planes, &cubes].into_iter().enumerate() {
             let got = img.depth[i];
             let hit = got.is_finite();
             union_inter[k][0] += (hit || want_hit) as usize;
@@ -552,15 +565,19 @@ fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let (ec, ep) = (med(&mut err[0]), med(&mut err[1]));
+    let (ec, ep, ed) = (med(&mut err[0]), med(&mut err[1]), med(&mut err[2]));
     let iou = union_inter.map(|[u, i]| i as f64 / u.max(1) as f64);
     eprintln!(
-        "largest voxel {:.1} px; median depth error / depth: cubes {ec:.4}, planes {ep:.4}; \
-         silhouette IoU: cubes {:.4}, planes {:.4}",
+        "largest voxel {:.1} px; median depth error / depth: cubes {ec:.4}, planes {ep:.4}, \
+         cubes at the planes' depth {ed:.4}; silhouette IoU: cubes {:.4}, planes {:.4}",
         cubes.largest_voxel_px, iou[0], iou[1]
     );
     assert!(cubes.largest_voxel_px > 4.0, "the tree is not coarse");
     assert!(ep < 0.5 * ec, "planes {ep} vs cubes {ec}");
+    assert!(
+        ed < 0.5 * ec,
+        "cubes at the planes' depth {ed} vs at their faces {ec}"
+    );
     assert!(
         iou[1] >= iou[0] - 0.005,
         "IoU planes {} vs cubes {}",

@@ -56,8 +56,12 @@ impl Ray {
 /// What a ray found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
-    /// Distance in root units (`f64::INFINITY` for a miss).
+    /// Distance in root units where the ray stopped at the node (`f64::INFINITY` for a miss):
+    /// the node's size on screen is its side over this.
     pub t: f64,
+    /// Distance the pixel is drawn at, its depth: `t`, or beyond it where the ray reaches
+    /// the leaf's surface plane ([`crate::plane::SurfacePlane::depth`]).
+    pub drawn: f64,
     /// RGBA8 colour of the node hit (0 for a miss).
     pub colour: u32,
     /// Node hit, or [`NONE`].
@@ -74,6 +78,7 @@ impl Hit {
     pub(crate) fn miss(steps: u32) -> Hit {
         Hit {
             t: f64::INFINITY,
+            drawn: f64::INFINITY,
             colour: 0,
             node: NONE,
             steps,
@@ -218,8 +223,9 @@ pub(crate) fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
 
 /// The leaf (or LOD-terminating inner node) handling shared by both traversals. Returns the
 /// hit when the ray stops here: a full leaf wider than the ray's pixel is met where the ray
-/// meets its solid part ([`crate::plane::SurfacePlane::meet`]), and passed through when it misses it (it
-/// still asks for the leaf's subdivision).
+/// meets its solid part ([`crate::plane::SurfacePlane::meet`]), and passed through when it
+/// misses it (it still asks for the leaf's subdivision); below the planes' threshold it stops
+/// at the cube, drawn at the depth of its plane ([`crate::plane::SurfacePlane::depth`]).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn stop_here(
@@ -243,17 +249,23 @@ fn stop_here(
     if n.is_empty() {
         return None;
     }
-    let mut t_hit = t;
+    let (mut t_hit, mut drawn) = (t, t);
     if b.dim() > t * lod {
         if b.depth < tree.depth_limit() && n.claim(REQUESTED) {
             reqs.push(Request { id, b: *b, t });
         }
-        if n.plane.is_some() && b.dim() > t * lod * tree.plane_px {
-            t_hit = n.plane.meet(r, b, t)?;
+        if n.plane.is_some() {
+            if b.dim() > t * lod * tree.plane_px {
+                t_hit = n.plane.meet(r, b, t)?;
+                drawn = t_hit;
+            } else {
+                drawn = n.plane.depth(r, b, t);
+            }
         }
     }
     Some(Hit {
         t: t_hit,
+        drawn,
         colour: n.colour,
         node: id,
         steps,
@@ -354,6 +366,7 @@ fn walk(
                 mark_visited(tree, id);
                 return Hit {
                     t,
+                    drawn: t,
                     colour: n.colour,
                     node: id,
                     steps,
@@ -462,6 +475,7 @@ pub fn cast_kdrestart(tree: &Octree, r: &Ray, eye_inside: bool, reqs: &mut Vec<R
                 mark_visited(tree, id);
                 return Hit {
                     t,
+                    drawn: t,
                     colour: n.colour,
                     node: id,
                     steps,

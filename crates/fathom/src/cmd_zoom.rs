@@ -121,12 +121,13 @@ pub struct ZoomArgs {
     /// walk of its own, down to this side in pixels (the --beam value: one level).
     #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_BEAM_MIN)]
     pub beam_min: u32,
-    /// Draw voxels wider than a pixel as the surface plane through them (shaded where the
-    /// line of sight meets the surface, with the distance gradient there as normal) instead
-    /// of as cubes: while detail arrives the zoom shows a faceted surface instead of a
-    /// staircase of cubes, closer to the sphere tracer (Mandelbulb to 1e15: median SSIM
-    /// 0.75 to 0.91), at about 60 % of the frame rate (rays step through the leaves whose
-    /// planes they pass).
+    /// Draw voxels wider than a pixel cut by the surface plane through them (shaded where
+    /// the line of sight meets the surface, with the distance gradient there as normal):
+    /// faceted silhouettes instead of cubes', and rays pass leaves whose line of sight met
+    /// the surface behind them. Without it such voxels are cubes drawn at their plane's
+    /// depth, which already gives the occlusion a smooth surface instead of a staircase
+    /// (Mandelbulb, 1000 frames to 1e15: median SSIM 0.951 without, 0.956 with), at about
+    /// 80 % of the frame rate (rays step through the leaves whose planes they pass).
     #[arg(long)]
     pub planes: bool,
     /// Split voxels near the screen's centre first: a voxel's size on screen counts divided
