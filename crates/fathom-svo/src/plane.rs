@@ -198,12 +198,17 @@ impl SurfacePlane {
     /// plane inwards before leaving the box, else `None` (it passes through the leaf).
     #[inline(always)]
     pub fn meet(self, r: &Ray, b: &BoxU, t: f64) -> Option<f64> {
+        // Every ray passes a leaf whose line of sight met the surface behind it (most of the
+        // wide leaves a Mandelbulb zoom's rays meet): no decoding for those.
+        if self.is_behind() {
+            return None;
+        }
         let (m, k) = self.decode_l1();
         // With `m` of unit L1 length the cube's support along it is one half side: with the
         // plane further than that behind the centre the whole cube is on the outer side (a
         // leaf the conservative full test kept whose surface point lies outside it), and
-        // every ray passes; so it does a leaf whose line of sight met the surface behind it.
-        if k <= -1.0 || self.is_behind() {
+        // every ray passes.
+        if k <= -1.0 {
             return None;
         }
         let tc = reach(m, k, r, b, t)?;
@@ -237,17 +242,6 @@ impl SurfacePlane {
     }
 }
 
-/// The point ray `r` enters box `b` (half side `h`) at `t`, relative to the box's centre (root
-/// units near the anchor: exact enough at any depth, the box's own scale).
-#[inline(always)]
-fn entry_offset(r: &Ray, b: &BoxU, t: f64, h: f64) -> DVec3 {
-    DVec3::new(
-        r.o[0] + t * r.d[0] - (b.min[0] + h),
-        r.o[1] + t * r.d[1] - (b.min[1] + h),
-        r.o[2] + t * r.d[2] - (b.min[2] + h),
-    )
-}
-
 /// Where ray `r`, entering the box `b` at `t`, reaches the inner side of the plane
 /// `m . (x - centre) = k h` (`m` of unit L1 length, `h` the half side): `t` when it enters
 /// there, the crossing when it heads inwards (however far past the box), `None` when it
@@ -255,7 +249,14 @@ fn entry_offset(r: &Ray, b: &BoxU, t: f64, h: f64) -> DVec3 {
 #[inline(always)]
 fn reach(m: DVec3, k: f64, r: &Ray, b: &BoxU, t: f64) -> Option<f64> {
     let h = b.dim() * 0.5;
-    let above = m.dot(entry_offset(r, b, t, h)) - k * h;
+    // The entry point relative to the centre (root units near the anchor: exact enough at
+    // any depth, the box's own scale).
+    let x = DVec3::new(
+        r.o[0] + t * r.d[0] - (b.min[0] + h),
+        r.o[1] + t * r.d[1] - (b.min[1] + h),
+        r.o[2] + t * r.d[2] - (b.min[2] + h),
+    );
+    let above = m.dot(x) - k * h;
     if above <= 0.0 {
         return Some(t);
     }
