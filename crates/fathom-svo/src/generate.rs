@@ -401,11 +401,15 @@ impl Shader {
             };
         }
         let g = self.gradient(ev, p, h);
+        // The plane goes through the surface, not through `p`: a line of sight stops up to a
+        // quarter side in front of it, and planes that far off, each leaf's by its own
+        // amount, showed as steps between neighbouring leaves in the depth the occlusion reads.
+        let on = onto_surface(p, v.d, g, h);
         let plane = match found {
             Some(SightHit {
                 behind: Some(dir), ..
-            }) => SurfacePlane::behind(g, -dir, p, c, h),
-            Some(_) => SurfacePlane::new(g, p, c, h),
+            }) => SurfacePlane::behind(g, -dir, on, c, h),
+            Some(_) => SurfacePlane::new(g, on, c, h),
             None => SurfacePlane::NONE,
         };
         Surface { p, v, g, plane }
@@ -770,6 +774,23 @@ impl SightHit {
             v,
             behind: (t > hd).then_some(dir),
         }
+    }
+}
+
+/// `p` moved onto the surface by one Newton step on the distance `d` there, along its
+/// gradient `g` (both already known: no evaluation), the step at most the half side `h`;
+/// `p` itself where the gradient vanishes.
+fn onto_surface(p: DVec3, d: f64, g: DVec3, h: f64) -> DVec3 {
+    let g2 = g.length_squared();
+    if !(d.is_finite() && g2 > 0.0) {
+        return p;
+    }
+    let step = g * (d / g2);
+    let len = step.length();
+    if len > h {
+        p - step * (h / len)
+    } else {
+        p - step
     }
 }
 
@@ -1377,6 +1398,70 @@ mod tests {
             "no child whose line passed it was dropped"
         );
         assert!(kept_clear > 0, "no clear child was kept");
+    }
+
+    #[test]
+    fn a_plane_point_is_moved_onto_the_zero_of_a_linear_distance() {
+        // A distance that is linear with any slope (estimates are scaled distances): one
+        // Newton step lands on its zero, from either side; a step longer than the half side
+        // is cut to it, and a vanishing or broken gradient leaves the point where it is.
+        let n = DVec3::new(0.3, -0.5, 0.8);
+        let field = |x: DVec3| 2.5 * (n.dot(x) - 0.1);
+        let g = 2.5 * n;
+        for p in [DVec3::new(0.2, 0.1, 0.3), DVec3::new(-0.1, 0.4, -0.2)] {
+            let on = onto_surface(p, field(p), g, 1.0);
+            assert!(field(on).abs() < 1e-12, "{p}: {} at {on}", field(on));
+            let short = onto_surface(p, field(p), g, 0.01);
+            assert!(((short - p).length() - 0.01).abs() < 1e-12, "{p}: {short}");
+            assert!(
+                field(short).abs() < field(p).abs(),
+                "{p}: not toward the zero"
+            );
+            assert_eq!(onto_surface(p, field(p), DVec3::ZERO, 1.0), p);
+            assert_eq!(onto_surface(p, f64::NAN, g, 1.0), p);
+        }
+    }
+
+    #[test]
+    fn a_leaf_plane_passes_nearer_the_surface_than_its_shading_point() {
+        // Voxels of several sizes around each zoom target: where the line of sight stopped
+        // (the shading point) the distance may be up to a quarter side; the plane's point
+        // nearest it, after the Newton step, must be much nearer the surface.
+        for name in ["mandelbulb", "menger"] {
+            let p = path_preset(name).unwrap();
+            let mut sh = Shader::new(&p.scene, DEFAULT_MARGIN).unwrap();
+            let t = p.path.target().unwrap();
+            let eye = p.path.camera(0, 300, 1e15, 40.0).eye;
+            sh.view = View {
+                eye,
+                scale: (t - eye).length(),
+            };
+            let mut pr = Probe::new();
+            let (mut at_point, mut at_plane) = (Vec::new(), Vec::new());
+            for h in [1e-2, 1e-3, 1e-4] {
+                for k in 0..64 {
+                    let f = |i: u32| ((k * 7 + i * 13) % 17) as f64 / 8.0 - 1.0;
+                    let c = t + DVec3::new(f(1), f(2), f(3)) * (2.0 * h);
+                    let d = sh.distance(&mut pr, c);
+                    let s = sh.surface(&mut pr, c, h, d);
+                    if !s.plane.is_some() || s.plane.is_behind() {
+                        continue;
+                    }
+                    let (m, off) = s.plane.decode();
+                    let q = s.p - m * (m.dot(s.p - c) - off * h);
+                    at_point.push(s.v.d.abs() / h);
+                    at_plane.push(sh.distance(&mut pr, q).abs() / h);
+                }
+            }
+            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+            let (a, b) = (mean(&at_point), mean(&at_plane));
+            eprintln!(
+                "{name}: {} planes; mean |distance| / half side: point {a:.4}, plane {b:.4}",
+                at_plane.len()
+            );
+            assert!(at_plane.len() >= 40, "{name}: {} planes", at_plane.len());
+            assert!(b < 0.5 * a, "{name}: plane {b} vs point {a}");
+        }
     }
 
     /// A zoom preset's shader, its zoom target and a deep origin at the target (double-double

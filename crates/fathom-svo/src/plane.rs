@@ -4,10 +4,12 @@
 //! During a zoom most visible leaves are wider than a pixel (detail arrives a few hundred
 //! subdivisions a frame), and drawn as cubes they turn a smooth surface into a staircase of
 //! faces with a cube's silhouette. Each full leaf therefore keeps, next to its colour, the
-//! plane through the surface point its colour was shaded at, with the distance gradient there
-//! as its normal (both already computed for the colour: no extra evaluation); a leaf whose
-//! line of sight passed it and met the surface behind keeps that surface's plane, marked so
-//! that it counts as clear of its cube ([`SurfacePlane::behind`]).
+//! plane whose normal is the distance gradient at the point its colour was shaded at, through
+//! that point moved onto the surface by a Newton step (the line of sight that found it stops
+//! up to a quarter side short; the distance and gradient there are already computed for the
+//! colour: no extra evaluation); a leaf whose line of sight passed it and met the surface
+//! behind keeps that surface's plane, marked so that it counts as clear of its cube
+//! ([`SurfacePlane::behind`]).
 //!
 //! With `--planes`, a ray that ends on a leaf wider than its pixel stops where it crosses
 //! that plane inside the cube, or at the entry point when it enters the cube on the plane's

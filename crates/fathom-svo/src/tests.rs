@@ -573,9 +573,12 @@ fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
         cubes.largest_voxel_px, iou[0], iou[1]
     );
     assert!(cubes.largest_voxel_px > 4.0, "the tree is not coarse");
-    assert!(ep < 0.5 * ec, "planes {ep} vs cubes {ec}");
+    // A quarter: with planes through the points where the leaves' lines of sight stopped (up
+    // to a quarter side in front of the surface) both were 0.29-0.30 of the faces' error;
+    // moved onto the surface by a Newton step, 0.16-0.17.
+    assert!(ep < 0.25 * ec, "planes {ep} vs cubes {ec}");
     assert!(
-        ed < 0.5 * ec,
+        ed < 0.25 * ec,
         "cubes at the planes' depth {ed} vs at their faces {ec}"
     );
     assert!(
