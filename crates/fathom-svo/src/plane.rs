@@ -83,15 +83,12 @@ impl SurfacePlane {
     /// (the octahedral map's own vector, so decoding needs no square root) and `k` the
     /// offset in those units.
     pub fn new(n: DVec3, p: DVec3, c: DVec3, h: f64) -> SurfacePlane {
-        let l1 = n.x.abs() + n.y.abs() + n.z.abs();
-        if !(l1.is_finite() && l1 > 0.0 && h.is_finite() && h > 0.0) {
-            return SurfacePlane::NONE;
-        }
-        let m = n / l1;
-        let k = m.dot(p - c) / h;
-        if !k.is_finite() {
-            return SurfacePlane::NONE;
-        }
+        l1_offset(n, p, c, h).map_or(SurfacePlane::NONE, |(m, k)| SurfacePlane::encode(m, k, 0))
+    }
+
+    /// The stored form of the plane `m . (x - c) = k h` (`m` of unit L1 length; `k` in units
+    /// of `behind` half sides, 0 meaning 1 for a leaf's own plane).
+    fn encode(m: DVec3, k: f64, behind: u8) -> SurfacePlane {
         // Octahedral map: fold the lower half outwards.
         let (u, v) = if m.z >= 0.0 {
             (m.x, m.y)
@@ -106,7 +103,7 @@ impl SurfacePlane {
         let qk = quantise(k, OFFSET_BITS, OFFSET_RANGE);
         SurfacePlane {
             bits: VALID | qu | qv << NORMAL_BITS | qk << (2 * NORMAL_BITS),
-            behind: 0,
+            behind,
         }
     }
 
@@ -123,21 +120,13 @@ impl SurfacePlane {
         } else {
             toward
         };
-        let l1 = n.x.abs() + n.y.abs() + n.z.abs();
-        let k = (n / l1).dot(p - c) / h;
-        let scale = if k.is_finite() {
-            (k.abs() / OFFSET_RANGE).ceil().clamp(1.0, 255.0)
-        } else {
-            1.0
-        };
-        let plane = SurfacePlane::new(n, p, c, h * scale);
-        SurfacePlane {
-            bits: if plane.is_some() {
-                plane.bits
-            } else {
-                SurfacePlane::new(DVec3::Z, c - DVec3::Z * 4.0 * h, c, h).bits
-            },
-            behind: scale as u8,
+        match l1_offset(n, p, c, h) {
+            Some((m, k)) => {
+                let scale = (k.abs() / OFFSET_RANGE).ceil().clamp(1.0, 255.0);
+                SurfacePlane::encode(m, k / scale, scale as u8)
+            }
+            // Only non-finite points: some plane well behind the cube, still marked behind.
+            None => SurfacePlane::encode(DVec3::Z, -OFFSET_RANGE, 1),
         }
     }
 
@@ -242,6 +231,19 @@ impl SurfacePlane {
         let most = (DEPTH_REACH + f64::from(self.behind)) * b.dim();
         reach(m, k * self.scale(), r, b, t).map_or(t, |tc| tc.min(t + most))
     }
+}
+
+/// The normal `n` scaled to unit L1 length and the offset of the plane through `p` from the
+/// centre `c` along it, in half sides `h`; `None` when `n` is zero or not finite, or the
+/// offset is not finite.
+fn l1_offset(n: DVec3, p: DVec3, c: DVec3, h: f64) -> Option<(DVec3, f64)> {
+    let l1 = n.x.abs() + n.y.abs() + n.z.abs();
+    if !(l1.is_finite() && l1 > 0.0 && h.is_finite() && h > 0.0) {
+        return None;
+    }
+    let m = n / l1;
+    let k = m.dot(p - c) / h;
+    k.is_finite().then_some((m, k))
 }
 
 /// Where ray `r`, entering the box `b` at `t`, reaches the inner side of the plane
