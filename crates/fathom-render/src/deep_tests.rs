@@ -123,6 +123,7 @@ fn zoom_comparisons_use_the_double_double_reference_when_deep() {
             ..RenderRequest::default()
         },
         compare_every: 3,
+        reference_samples: 1,
         warmup_ms: 0.0,
     };
     let r = z.run(&p, false, |_| Ok(())).unwrap();
@@ -150,6 +151,7 @@ fn zoom_comparisons_use_the_double_double_reference_when_deep() {
         };
         assert_eq!(c.reference, want, "frame {}", c.frame);
         assert_eq!(c.reduced, 1);
+        assert_eq!(c.reference_samples, 1);
         if p.is_deep(&d) {
             deep += 1;
             assert!(

@@ -12,6 +12,7 @@ use crate::args::parse_size;
 use clap::Args;
 use fathom_core::camera_path::{CameraPath, path_preset};
 use fathom_core::scenes;
+use fathom_render::compare::DEEP_REFERENCE_PIXELS;
 use fathom_render::zoom::{Zoom, ZoomReport};
 use fathom_render::{Backend, OctreeSettings, RenderRequest};
 use fathom_svo::outline::{agreement, similarity};
@@ -131,10 +132,11 @@ fn quality(
     size: &str,
     every: usize,
 ) -> Result<Vec<DecadeQuality>, String> {
+    let n = fathom_render::zoom::DEFAULT_REFERENCE_SAMPLES;
     let _ = writeln!(
         md,
         "## Picture quality during the zoom ({frames} frames to zoom {depth:.0e}, {size}, compared with the sphere tracer every {every} frames)\n\n\
-         SSIM of display luminance (8x8 windows every 4 pixels), silhouette IoU and mean display-colour error per channel against the CPU sphere tracer at the same camera (soft shadows off: the octree bakes none); largest visible voxel in pixels over every frame of the decade.\n\n\
+         SSIM of display luminance (8x8 windows every 4 pixels), silhouette IoU and mean display-colour error per channel against the CPU sphere tracer at the same camera (soft shadows off: the octree bakes none), past zoom 1e6 against the double-double reference at most {DEEP_REFERENCE_PIXELS} pixels (80x60 at 640x480) with {n}x{n} rays a pixel and the octree frame reduced to its size (block means); largest visible voxel in pixels over every frame of the decade.\n\n\
          | preset | zoom decade | frames compared | median SSIM | median IoU | median colour error | median largest voxel px | max largest voxel px |\n|---|---|---|---|---|---|---|---|"
     );
     let mut rows = Vec::new();
@@ -200,6 +202,7 @@ fn zoom(t: Traversal, frames: usize, depth: f64, size: &str) -> Result<Zoom, Str
             ..RenderRequest::default()
         },
         compare_every: 0,
+        reference_samples: fathom_render::zoom::DEFAULT_REFERENCE_SAMPLES,
         // The frame rates measure the zoom itself, from the root cube as they always have.
         warmup_ms: 0.0,
     })
@@ -621,6 +624,7 @@ mod tests {
             trace_ms: 0.0,
             reference: "f64",
             reduced: 1,
+            reference_samples: 1,
         };
         let r = ZoomReport {
             preset: "p".into(),

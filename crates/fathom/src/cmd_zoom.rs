@@ -167,6 +167,14 @@ pub struct ZoomArgs {
     /// in the zoom's frame times, but it slows the run).
     #[arg(long, default_value_t = 0)]
     pub compare_every: usize,
+    /// With --compare-every: rays a pixel side of the double-double reference that frames
+    /// past zoom 1e6 are compared with (at 80x60, against 8x8 block means of the octree's
+    /// frame), [1, 4]. One ray at a pixel's centre is not what a block mean shows of detail
+    /// finer than the pixel: deep Menger frames score SSIM 0.62-0.64 against one ray and
+    /// 0.68-0.71 against 2x2, for 4x the reference's time (Menger 3 s to 12 s a compared
+    /// frame, Mandelbulb 5 s to 21 s); n costs n^2.
+    #[arg(long, default_value_t = fathom_render::zoom::DEFAULT_REFERENCE_SAMPLES)]
+    pub reference_samples: u32,
     /// With --compare-every: write each compared frame into this directory as
     /// compare_NNNNN.png, the octree's frame on the left and the sphere tracer's on the right
     /// (deep frames at the reduced size they are compared at).
@@ -266,6 +274,7 @@ pub fn zoom(a: &ZoomArgs) -> Result<Zoom, String> {
             ..RenderRequest::default()
         },
         compare_every: a.compare_every,
+        reference_samples: a.reference_samples,
         warmup_ms: a.warmup_ms,
     };
     z.validate().map_err(|e| e.to_string())?;
@@ -447,6 +456,15 @@ mod tests {
         a.frames = 0;
         assert!(zoom(&a).err().unwrap().contains("--frames"));
         a.frames = 3;
+        for n in [0, 5] {
+            a.reference_samples = n;
+            let e = zoom(&a).err().unwrap();
+            assert!(
+                e.contains("--reference-samples") && e.contains("1..=4"),
+                "{e}"
+            );
+        }
+        a.reference_samples = 2;
         a.fidelity = 100.0;
         assert!(zoom(&a).err().unwrap().contains("fidelity"));
         a.fidelity = 1.0;
