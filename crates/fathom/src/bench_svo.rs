@@ -197,6 +197,8 @@ fn zoom(t: Traversal, frames: usize, depth: f64, size: &str) -> Result<Zoom, Str
             backend: Backend::Octree,
             octree: OctreeSettings {
                 traversal: t,
+                // As `fathom zoom` runs by default.
+                target_fps: fathom_render::zoom::DEFAULT_TARGET_FPS,
                 ..OctreeSettings::default()
             },
             ..RenderRequest::default()

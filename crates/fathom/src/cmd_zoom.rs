@@ -106,8 +106,9 @@ pub struct ZoomArgs {
     pub subdivide_ms: f64,
     /// Hold this frame rate: a frame whose render leaves less than --subdivide-ms of the frame
     /// time subdivides for what is left, down to half of it (0: always --subdivide-ms),
-    /// [0, 1000].
-    #[arg(long, default_value_t = 0.0)]
+    /// [0, 1000]. It only takes time from subdividing, so frames whose render alone is slower
+    /// stay slower.
+    #[arg(long, default_value_t = fathom_render::zoom::DEFAULT_TARGET_FPS)]
     pub target_fps: f64,
     /// Unify (unload bricks no ray visited) every this many frames, >= 1.
     #[arg(long, default_value_t = 4)]
