@@ -212,7 +212,7 @@ pub fn reduce(frame: &Frame, f: u32) -> Frame {
                 }
             }
             out.colour[o] = c.map(|v| v / n);
-            if 2 * hits >= f * f {
+            if fathom_trace::deep::covers(hits, f * f) {
                 out.depth[o] = near;
             }
         }

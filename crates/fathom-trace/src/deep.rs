@@ -161,7 +161,7 @@ pub fn march_depths<S: Real>(
                 .map(|x| {
                     let rays = pixel_rays(&frame, x, y, width, height, opts.pixel_samples);
                     let hits = rays.map(|dir| march_ray(ev, tape, eye, dir, pixel_angle, opts).0);
-                    covered_depth(hits, opts.pixel_samples)
+                    covered_depth(hits)
                 })
                 .collect()
         })
@@ -219,16 +219,25 @@ fn pixel_rays(
         .map(move |k| frame.ray_dir(x as f64 + at(k % n), y as f64 + at(k / n), width, height))
 }
 
-/// A pixel's depth from its rays' hits (`n` x `n` of them, [`pixel_rays`]): the nearest,
-/// when at least half of them hit.
-fn covered_depth(hits: impl Iterator<Item = Option<f64>>, n: u32) -> Option<f64> {
-    let n = n.clamp(1, MAX_PIXEL_SAMPLES);
-    let (mut count, mut nearest) = (0, f64::INFINITY);
-    for t in hits.flatten() {
-        count += 1;
-        nearest = nearest.min(t);
+/// Whether a pixel made of `samples` rays (or, reduced, of `samples` pixels) of which `hits`
+/// hit counts as a hit: at least half of them. The reference's pixels and the octree frame's
+/// blocks (`fathom_render::compare::reduce`) must follow the same rule.
+pub fn covers(hits: u32, samples: u32) -> bool {
+    2 * hits >= samples
+}
+
+/// A pixel's depth from its rays' hits ([`pixel_rays`]): the nearest, when they cover it
+/// ([`covers`]).
+fn covered_depth(hits: impl Iterator<Item = Option<f64>>) -> Option<f64> {
+    let (mut rays, mut count, mut nearest) = (0, 0, f64::INFINITY);
+    for t in hits {
+        rays += 1;
+        if let Some(t) = t {
+            count += 1;
+            nearest = nearest.min(t);
+        }
     }
-    (2 * count >= n * n).then_some(nearest)
+    covers(count, rays).then_some(nearest)
 }
 
 /// What a pixel of [`deep_frame`] gathers from its rays: the sum of their colours (sky for a
@@ -327,7 +336,7 @@ pub fn deep_frame(
     for (i, px) in rows.into_iter().flatten().enumerate() {
         img.colour[i] = px.colour.map(|c| c / px.rays.max(1) as f32);
         img.steps[i] = px.steps;
-        if let Some((t, s)) = px.nearest.filter(|_| 2 * px.hits >= px.rays) {
+        if let Some((t, s)) = px.nearest.filter(|_| covers(px.hits, px.rays)) {
             img.depth[i] = t as f32;
             img.normal[i] = s.normal;
             img.id[i] = s.id;
