@@ -2,9 +2,10 @@
 //! call's parameters, with each parameter's declared range, default and documentation (as the
 //! tooltip). A new primitive, fractal or operator appears here with no GUI code.
 //!
-//! Editing rules: sliders cover the declared range (logarithmic when it spans three orders of
-//! magnitude); a typed value outside it is clamped into it and a note says so; double-click
-//! (or the context menu) resets a parameter to its default.
+//! Editing rules: sliders cover the declared *soft* range (what artists use; logarithmic when
+//! it spans two decades); a typed value may go anywhere in the hard range (what is valid), and
+//! one outside it is clamped into it with a note saying so; double-click (or the context menu)
+//! resets a parameter to its default.
 
 use fathom_core::registry::{Family, ParamKind, ParamSpec, fmt_num};
 use fathom_core::scene::Call;
@@ -18,22 +19,24 @@ pub fn param_tooltip(p: &ParamSpec) -> String {
         .collect::<Vec<_>>()
         .join(", ");
     format!(
-        "{}\ndefault {d}; range [{}, {}]\ndouble-click resets",
+        "{}\ndefault {d}; slider [{}, {}], typed values [{}, {}]\ndouble-click resets",
         p.doc,
+        fmt_num(p.soft_min),
+        fmt_num(p.soft_max),
         fmt_num(p.min),
         fmt_num(p.max)
     )
 }
 
-/// A combo box choosing an entry of family `K`; returns whether it changed. Changing the entry
-/// resets its parameters to the new entry's defaults.
+/// A combo box choosing an entry of family `K`; says what changed (`change shape to Box`).
+/// Changing the entry resets its parameters to the new entry's defaults.
 pub fn entry_picker<K: Family>(
     ui: &mut egui::Ui,
     id: impl egui::AsIdSalt,
     label: &str,
     call: &mut Call<K>,
-) -> bool {
-    let mut changed = false;
+) -> Option<String> {
+    let mut changed = None;
     let current = call.kind;
     egui::ComboBox::new(id, label)
         .selected_text(current.def().name)
@@ -44,29 +47,29 @@ pub fn entry_picker<K: Family>(
                     .on_hover_text(k.def().doc);
                 if r.clicked() && k != current {
                     *call = Call::new(k);
-                    changed = true;
+                    changed = Some(format!("change {label} to {}", k.def().name));
                 }
             }
         });
     changed
 }
 
-/// Editors for every parameter of `call`. Clamped values add a line to `notes`. Returns
-/// whether anything changed.
+/// Editors for every parameter of `call`. Clamped values add a line to `notes`. Says what
+/// changed (`set minor`, `reset minor`).
 pub fn call_params<K: Family>(
     ui: &mut egui::Ui,
     call: &mut Call<K>,
     notes: &mut Vec<String>,
-) -> bool {
+) -> Option<String> {
     let def = call.kind.def();
-    let mut changed = false;
+    let mut changed = None;
     let mut off = 0;
     for p in def.params {
         let w = p.kind.width();
         let values = &mut call.params[off..off + w];
-        let r = param_editor(ui, p, values);
+        let r = param_editor(ui, def.name, p, values);
         if r.changed {
-            changed = true;
+            changed.get_or_insert_with(|| format!("set {}", p.name));
             let clamped = p.clamp(values);
             if clamped != values {
                 notes.push(format!(
@@ -91,7 +94,7 @@ pub fn call_params<K: Family>(
         }
         if r.reset {
             values.copy_from_slice(p.default_values());
-            changed = true;
+            changed = Some(format!("reset {}", p.name));
         }
         off += w;
     }
@@ -103,18 +106,22 @@ struct Edited {
     reset: bool,
 }
 
-/// One parameter's widget(s).
-fn param_editor(ui: &mut egui::Ui, p: &ParamSpec, v: &mut [f64]) -> Edited {
+/// One parameter's widget(s): a slider over the declared soft range (logarithmic when it spans
+/// decades), or drag values for vectors whose speed follows the soft range; typed values may
+/// go anywhere in the hard range. Sliders and drag values sense drags only; double-click (and
+/// the context menu) resets, so clicks are asked for here.
+fn param_editor(ui: &mut egui::Ui, entry: &str, p: &ParamSpec, v: &mut [f64]) -> Edited {
     let tip = param_tooltip(p);
-    let span = p.max - p.min;
-    let log = p.min > 0.0 && p.max / p.min >= 1e3;
     let mut out = Edited {
         changed: false,
         reset: false,
     };
+    let name = format!("{entry}.{}", p.name);
     let handle = |r: egui::Response, out: &mut Edited| {
-        let r = r.on_hover_text(&tip);
+        // (`interact` answers a new response: read the edit off the widget's own first.)
         out.changed |= r.changed();
+        let r = r.interact(egui::Sense::click()).on_hover_text(&tip);
+        crate::script::place("param", name.clone(), &r);
         if r.double_clicked() {
             out.reset = true;
         }
@@ -125,34 +132,23 @@ fn param_editor(ui: &mut egui::Ui, p: &ParamSpec, v: &mut [f64]) -> Edited {
             }
         });
     };
+    // About 300 pixels of drag across the soft range.
+    let speed = (p.soft_max - p.soft_min) / 300.0;
     match p.kind {
-        ParamKind::Scalar | ParamKind::Int if span.is_finite() && span <= 1e6 => {
-            let mut s = egui::Slider::new(&mut v[0], p.min..=p.max)
+        ParamKind::Scalar | ParamKind::Int => {
+            let mut s = egui::Slider::new(&mut v[0], p.soft_min..=p.soft_max)
                 .text(p.name)
                 .clamping(egui::SliderClamping::Never)
-                .logarithmic(log);
+                .logarithmic(p.soft_is_logarithmic());
             if p.kind == ParamKind::Int {
                 s = s.integer();
             }
             let r = ui.add(s);
             handle(r, &mut out);
         }
-        ParamKind::Scalar | ParamKind::Int => {
-            ui.horizontal(|ui| {
-                let speed = (v[0].abs() * 0.01).max(1e-3);
-                let r = ui.add(egui::DragValue::new(&mut v[0]).speed(speed));
-                handle(r, &mut out);
-                ui.label(p.name);
-            });
-        }
         ParamKind::Vec3 => {
             ui.horizontal(|ui| {
                 for c in v.iter_mut() {
-                    let speed = if span.is_finite() && span <= 100.0 {
-                        0.01
-                    } else {
-                        (c.abs() * 0.01).max(1e-3)
-                    };
                     let r = ui.add(egui::DragValue::new(c).speed(speed).max_decimals(4));
                     handle(r, &mut out);
                 }
@@ -172,6 +168,9 @@ mod tests {
     fn tooltips_name_the_range_and_default() {
         let def = Primitive::Sphere.def();
         let t = param_tooltip(&def.params[0]);
-        assert!(t.contains("default 1") && t.contains("range ["), "{t}");
+        assert!(
+            t.contains("default 1") && t.contains("slider [0, 4], typed values [0, 1e6]"),
+            "{t}"
+        );
     }
 }

@@ -105,6 +105,20 @@ pub fn fmt_range(spec: &ParamSpec) -> String {
     format!("[{}, {}]", fmt_value(spec.min), fmt_value(spec.max))
 }
 
+/// The slider's range, `[lo, hi]`, with `log` when the slider is logarithmic.
+pub fn fmt_soft_range(spec: &ParamSpec) -> String {
+    format!(
+        "[{}, {}]{}",
+        fmt_value(spec.soft_min),
+        fmt_value(spec.soft_max),
+        if spec.soft_is_logarithmic() {
+            " log"
+        } else {
+            ""
+        }
+    )
+}
+
 /// The first line of an entry's doc.
 pub fn first_line(doc: &str) -> &str {
     doc.lines().next().unwrap_or("").trim()
@@ -154,16 +168,17 @@ fn group_markdown(out: &mut String, g: &Group) {
         let _ = writeln!(out, "- Distance quality: {}", def.quality);
         let _ = writeln!(out, "- Written: `{}`\n", example_call(def));
         if !def.params.is_empty() {
-            out.push_str("| parameter | kind | default | range | meaning |\n");
-            out.push_str("|---|---|---|---|---|\n");
+            out.push_str("| parameter | kind | default | range | slider | meaning |\n");
+            out.push_str("|---|---|---|---|---|---|\n");
             for p in def.params {
                 let _ = writeln!(
                     out,
-                    "| `{}` | {} | `{}` | {} | {} |",
+                    "| `{}` | {} | `{}` | {} | {} | {} |",
                     p.name,
                     kind_name(p.kind),
                     fmt_default(p),
                     fmt_range(p),
+                    fmt_soft_range(p),
                     p.doc.replace('|', "\\|")
                 );
             }
@@ -183,7 +198,8 @@ pub fn scene_reference_markdown() -> String {
          Every shape and operator a scene file can name, with its parameters. Parameters left \
          out take their defaults; a bare name (`Sphere`) takes all defaults. Values outside a \
          range are refused with an error naming the range; vector ranges apply to each \
-         component. `fathom list` prints the same tables. The format itself is described in \
+         component. The *slider* range is what the explorer's sliders cover (typed values may \
+         go anywhere in the range). `fathom list` prints the same tables. The format itself is described in \
          [scene-format.md](scene-format.md).\n\n\
          Distance quality: **exact** is the true Euclidean distance; **bound** never exceeds \
          it (safe for sphere tracing); **bound with safety factor** means the operator \

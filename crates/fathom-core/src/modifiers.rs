@@ -12,10 +12,10 @@ crate::declare_family! {
     fn modify(d: S, k: S) -> S;
 
     /// Rounds edges by `radius` (grows the shape by that much).
-    Round [Bound] (radius: Scalar = 0.1, [0.0, BIG], "rounding radius") => d - radius * k;
+    Round [Bound] (radius: Scalar = 0.1, [0.0, BIG], soft [0.0, 1.0], "rounding radius") => d - radius * k;
 
     /// Turns the solid into a shell of the given thickness around its surface.
-    Onion [Bound] (thickness: Scalar = 0.05, [0.0, BIG], "shell half-thickness")
+    Onion [Bound] (thickness: Scalar = 0.05, [0.0, BIG], soft [0.0, 1.0], "shell half-thickness")
         => d.abs() - thickness * k;
 }
 

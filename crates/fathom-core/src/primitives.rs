@@ -28,25 +28,25 @@ crate::declare_family! {
     Empty [Exact] () => S::splat(1e20);
 
     /// A sphere of the given radius.
-    Sphere [Exact] (radius: Scalar = 1.0, [0.0, BIG], "radius")
+    Sphere [Exact] (radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius")
         => p.length() - radius;
 
     /// An axis-aligned box; `size` holds the half-extents.
-    Box [Exact] (size: Vec3 = [1.0, 1.0, 1.0], [0.0, BIG], "half-extents along x, y, z")
+    Box [Exact] (size: Vec3 = [1.0, 1.0, 1.0], [0.0, BIG], soft [0.0, 4.0], "half-extents along x, y, z")
         => box3(p, size);
 
     /// A box with rounded edges: half-extents `size` (the outer extent), edges rounded by
     /// `radius`. A radius larger than a half-extent makes that extent equal to the radius.
     RoundBox [Exact] (
-        size: Vec3 = [1.0, 1.0, 1.0], [0.0, BIG], "outer half-extents along x, y, z",
-        radius: Scalar = 0.1, [0.0, BIG], "edge rounding radius",
+        size: Vec3 = [1.0, 1.0, 1.0], [0.0, BIG], soft [0.0, 4.0], "outer half-extents along x, y, z",
+        radius: Scalar = 0.1, [0.0, BIG], soft [0.0, 1.0], "edge rounding radius",
     ) => box3(p, (size - V3::splat(radius)).maxs(S::zero())) - radius;
 
     /// The twelve edges of a box as square bars: outer half-extents `size`, bars `thickness`
     /// wide. Exact outside; inside, where bars overlap at the corners, a bound.
     BoxFrame [Bound] (
-        size: Vec3 = [1.0, 1.0, 1.0], [0.0, BIG], "outer half-extents along x, y, z",
-        thickness: Scalar = 0.1, [0.0, BIG], "width of each bar",
+        size: Vec3 = [1.0, 1.0, 1.0], [0.0, BIG], soft [0.0, 4.0], "outer half-extents along x, y, z",
+        thickness: Scalar = 0.1, [0.0, BIG], soft [0.0, 1.0], "width of each bar",
     ) => {
         let e = thickness * S::splat(0.5);
         let p = p.abs() - size;
@@ -57,17 +57,17 @@ crate::declare_family! {
     /// A torus in the xz plane. Exact for `minor <= major` (a ring torus); for a self-
     /// intersecting spindle torus it is exact outside and a bound inside.
     Torus [Bound] (
-        major: Scalar = 1.0, [0.0, BIG], "radius of the ring",
-        minor: Scalar = 0.25, [0.0, BIG], "radius of the tube",
+        major: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius of the ring",
+        minor: Scalar = 0.25, [0.0, BIG], soft [0.0, 1.0], "radius of the tube",
     ) => len2(len2(p.x, p.z) - major, p.y) - minor;
 
     /// A torus cut to an arc in the xy plane, symmetric about +y: the ring spans `angle`
     /// degrees either side of +y. Exact outside; inside exact while `minor` is small against
     /// `major` and the gap of the arc, a bound otherwise.
     CappedTorus [Bound] (
-        angle: Scalar = 120.0, [0.0, 180.0], "half-aperture of the arc in degrees, from +y",
-        major: Scalar = 1.0, [0.0, BIG], "radius of the ring",
-        minor: Scalar = 0.2, [0.0, BIG], "radius of the tube",
+        angle: Scalar = 120.0, [0.0, 180.0], soft [0.0, 180.0], "half-aperture of the arc in degrees, from +y",
+        major: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius of the ring",
+        minor: Scalar = 0.2, [0.0, BIG], soft [0.0, 1.0], "radius of the tube",
     ) baked(bake_sin_cos_first) (sin_a: Scalar, cos_a: Scalar, major: Scalar, minor: Scalar)
         => {
             let px = p.x.abs();
@@ -79,30 +79,30 @@ crate::declare_family! {
     /// A chain link: two half-tori of ring radius `major` joined by straight tubes, elongated
     /// along y by `half_length` either side. Exact for `minor <= major`, else a bound inside.
     Link [Bound] (
-        half_length: Scalar = 0.5, [0.0, BIG], "half-length of the straight parts (along y)",
-        major: Scalar = 0.5, [0.0, BIG], "radius of the ring",
-        minor: Scalar = 0.15, [0.0, BIG], "radius of the tube",
+        half_length: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "half-length of the straight parts (along y)",
+        major: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "radius of the ring",
+        minor: Scalar = 0.15, [0.0, BIG], soft [0.0, 1.0], "radius of the tube",
     ) => {
         let qy = (p.y.abs() - half_length).max(S::zero());
         len2(len2(p.x, qy) - major, p.z) - minor
     };
 
     /// An infinite cylinder along y.
-    Cylinder [Exact] (radius: Scalar = 1.0, [0.0, BIG], "radius")
+    Cylinder [Exact] (radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius")
         => len2(p.x, p.z) - radius;
 
     /// A cylinder along y capped at `y = ±half_height`.
     CappedCylinder [Exact] (
-        radius: Scalar = 1.0, [0.0, BIG], "radius",
-        half_height: Scalar = 1.0, [0.0, BIG], "half of the height (along y)",
+        radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius",
+        half_height: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "half of the height (along y)",
     ) => box_q2(len2(p.x, p.z) - radius, p.y.abs() - half_height);
 
     /// A capped cylinder along y with edges rounded by `rounding` (outer radius and
     /// half-height as given).
     RoundedCylinder [Exact] (
-        radius: Scalar = 1.0, [0.0, BIG], "outer radius",
-        half_height: Scalar = 1.0, [0.0, BIG], "outer half-height (along y)",
-        rounding: Scalar = 0.1, [0.0, BIG], "edge rounding radius",
+        radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "outer radius",
+        half_height: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "outer half-height (along y)",
+        rounding: Scalar = 0.1, [0.0, BIG], soft [0.0, 1.0], "edge rounding radius",
     ) => box_q2(
         len2(p.x, p.z) - (radius - rounding).max(S::zero()),
         p.y.abs() - (half_height - rounding).max(S::zero()),
@@ -110,23 +110,23 @@ crate::declare_family! {
 
     /// A cone along y: base disc of `radius` at `y = -half_height`, tip at `y = +half_height`.
     Cone [Exact] (
-        radius: Scalar = 1.0, [0.0, BIG], "radius of the base",
-        half_height: Scalar = 1.0, [0.0, BIG], "half of the height (along y)",
+        radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius of the base",
+        half_height: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "half of the height (along y)",
     ) => capped_cone(p, half_height, radius, S::zero());
 
     /// A frustum along y: radius `bottom` at `y = -half_height`, `top` at `y = +half_height`.
     CappedCone [Exact] (
-        half_height: Scalar = 1.0, [0.0, BIG], "half of the height (along y)",
-        bottom: Scalar = 1.0, [0.0, BIG], "radius at the bottom",
-        top: Scalar = 0.5, [0.0, BIG], "radius at the top",
+        half_height: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "half of the height (along y)",
+        bottom: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius at the bottom",
+        top: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "radius at the top",
     ) => capped_cone(p, half_height, bottom, top);
 
     /// The convex hull of two spheres on the y axis: radius `bottom` centred at
     /// `y = -half_height`, radius `top` at `y = +half_height`.
     RoundCone [Exact] (
-        bottom: Scalar = 0.5, [0.0, BIG], "radius of the bottom sphere",
-        top: Scalar = 0.25, [0.0, BIG], "radius of the top sphere",
-        half_height: Scalar = 0.5, [0.0, BIG], "half the distance between the sphere centres",
+        bottom: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "radius of the bottom sphere",
+        top: Scalar = 0.25, [0.0, BIG], soft [0.0, 1.0], "radius of the top sphere",
+        half_height: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "half the distance between the sphere centres",
     ) => {
         let h = half_height * S::splat(2.0);
         let b = ((bottom - top) / h.max(S::splat(TINY))).clamp(-S::one(), S::one());
@@ -144,15 +144,15 @@ crate::declare_family! {
 
     /// An infinite plane through the origin with the given normal (need not be unit length;
     /// zero means +y).
-    Plane [Exact] (normal: Vec3 = [0.0, 1.0, 0.0], [-BIG, BIG], "normal direction")
+    Plane [Exact] (normal: Vec3 = [0.0, 1.0, 0.0], [-BIG, BIG], soft [-1.0, 1.0], "normal direction")
         baked(bake_unit_normal) (unit: Vec3)
         => p.dot(unit);
 
     /// A hexagonal prism along y: `radius` is the inradius of the hexagon (centre to flat
     /// side), which has two flat sides facing ±z.
     HexPrism [Exact] (
-        radius: Scalar = 1.0, [0.0, BIG], "inradius of the hexagon",
-        half_height: Scalar = 1.0, [0.0, BIG], "half of the height (along y)",
+        radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "inradius of the hexagon",
+        half_height: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "half of the height (along y)",
     ) => {
         let (kx, ky, kz) = (S::splat(-0.866_025_403_784_438_6), S::splat(0.5), S::splat(0.577_350_269_189_625_8));
         let (mut ax, mut az) = (p.x.abs(), p.z.abs());
@@ -167,15 +167,15 @@ crate::declare_family! {
     /// A triangular prism along y: an equilateral triangle of side `2 * half_side` in the xz
     /// plane (centroid at the origin, one vertex towards +z), extruded by `half_height`.
     TriPrism [Exact] (
-        half_side: Scalar = 1.0, [0.0, BIG], "half of the side length of the triangle",
-        half_height: Scalar = 1.0, [0.0, BIG], "half of the height (along y)",
+        half_side: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "half of the side length of the triangle",
+        half_height: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "half of the height (along y)",
     ) => box_q2(equilateral_triangle(p.x, p.z, half_side), p.y.abs() - half_height);
 
     /// A capsule along y: the segment from `y = -half_height` to `+half_height`, thickened
     /// by `radius`.
     Capsule [Exact] (
-        radius: Scalar = 0.5, [0.0, BIG], "radius",
-        half_height: Scalar = 0.5, [0.0, BIG], "half-length of the axis segment",
+        radius: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "radius",
+        half_height: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "half-length of the axis segment",
     ) => {
         let qy = p.y - p.y.clamp(-half_height, half_height);
         V3::new(p.x, qy, p.z).length() - radius
@@ -183,16 +183,16 @@ crate::declare_family! {
 
     /// A capsule around the segment from `a` to `b`.
     CapsuleSegment [Exact] (
-        a: Vec3 = [-0.5, 0.0, 0.0], [-BIG, BIG], "first end of the segment",
-        b: Vec3 = [0.5, 0.0, 0.0], [-BIG, BIG], "second end of the segment",
-        radius: Scalar = 0.25, [0.0, BIG], "radius",
+        a: Vec3 = [-0.5, 0.0, 0.0], [-BIG, BIG], soft [-2.0, 2.0], "first end of the segment",
+        b: Vec3 = [0.5, 0.0, 0.0], [-BIG, BIG], soft [-2.0, 2.0], "second end of the segment",
+        radius: Scalar = 0.25, [0.0, BIG], soft [0.0, 1.0], "radius",
     ) => segment_dist2(p, a, b).sqrt() - radius;
 
     /// A spherical sector (an ice-cream cone): the part of a sphere of `radius` within
     /// `angle` degrees of +y, tip at the origin.
     SolidAngle [Exact] (
-        angle: Scalar = 30.0, [0.0, 180.0], "half-aperture in degrees, from +y",
-        radius: Scalar = 1.0, [0.0, BIG], "radius of the sphere",
+        angle: Scalar = 30.0, [0.0, 180.0], soft [0.0, 180.0], "half-aperture in degrees, from +y",
+        radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius of the sphere",
     ) baked(bake_sin_cos_first) (sin_a: Scalar, cos_a: Scalar, radius: Scalar)
         => {
             let qx = len2(p.x, p.z);
@@ -207,8 +207,8 @@ crate::declare_family! {
     /// The part of a sphere above the plane `y = cut` (a flat bottom; `cut <= -radius` keeps
     /// the whole sphere, `cut >= radius` leaves a point).
     CutSphere [Exact] (
-        radius: Scalar = 1.0, [0.0, BIG], "radius of the sphere",
-        cut: Scalar = 0.5, [-BIG, BIG], "height of the cutting plane",
+        radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius of the sphere",
+        cut: Scalar = 0.5, [-BIG, BIG], soft [-2.0, 2.0], "height of the cutting plane",
     ) baked(bake_cut_sphere) (radius: Scalar, h: Scalar, w: Scalar)
         => {
             let qx = len2(p.x, p.z);
@@ -225,9 +225,9 @@ crate::declare_family! {
     /// `y = cut` removed (an open bowl; `cut >= radius` keeps the whole shell). Exact outside;
     /// a bound inside when the shell is thick against the opening.
     CutHollowSphere [Bound] (
-        radius: Scalar = 1.0, [0.0, BIG], "radius of the sphere",
-        cut: Scalar = 0.5, [-BIG, BIG], "height of the cutting plane",
-        thickness: Scalar = 0.05, [0.0, BIG], "half-thickness of the shell",
+        radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius of the sphere",
+        cut: Scalar = 0.5, [-BIG, BIG], soft [-2.0, 2.0], "height of the cutting plane",
+        thickness: Scalar = 0.05, [0.0, BIG], soft [0.0, 1.0], "half-thickness of the shell",
     ) baked(bake_cut_hollow_sphere) (radius: Scalar, h: Scalar, w: Scalar, thickness: Scalar)
         => {
             let qx = len2(p.x, p.z);
@@ -240,9 +240,9 @@ crate::declare_family! {
     /// `(offset, 0, 0)` is carved out. Exact when the spheres' surfaces intersect, otherwise
     /// a bound.
     DeathStar [Bound] (
-        radius: Scalar = 1.0, [0.0, BIG], "radius of the main sphere",
-        cut_radius: Scalar = 0.8, [0.0, BIG], "radius of the carved-out sphere",
-        offset: Scalar = 1.2, [0.0, BIG], "distance of the carved sphere's centre along +x",
+        radius: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "radius of the main sphere",
+        cut_radius: Scalar = 0.8, [0.0, BIG], soft [0.0, 4.0], "radius of the carved-out sphere",
+        offset: Scalar = 1.2, [0.0, BIG], soft [0.0, 5.0], "distance of the carved sphere's centre along +x",
     ) baked(bake_death_star) (radius: Scalar, cut_radius: Scalar, offset: Scalar, ca: Scalar, cb: Scalar)
         => {
             let qx = p.x;
@@ -256,17 +256,17 @@ crate::declare_family! {
     /// `(|p / radii| - 1) * min(radii)` and `|p| - max(radii)`. (iq's sharper
     /// `k0 (k0 - 1) / k1` is not 1-Lipschitz: the tests found slopes above 1.03.) Exact on the
     /// longest and shortest axes' ends for a sphere; an underestimate elsewhere.
-    Ellipsoid [Bound] (radii: Vec3 = [1.0, 0.5, 0.75], [0.0, BIG], "semi-axes along x, y, z")
+    Ellipsoid [Bound] (radii: Vec3 = [1.0, 0.5, 0.75], [0.0, BIG], soft [0.0, 4.0], "semi-axes along x, y, z")
         baked(bake_ellipsoid) (inv_r: Vec3, min_r: Scalar, max_r: Scalar)
         => (((p * inv_r).length() - S::one()) * min_r).max(p.length() - max_r);
 
     /// A rhombus slab: half-diagonals `half_x` and `half_z` in the xz plane, half-thickness
     /// `half_height` along y, the outline grown by `radius` (rounded corners).
     Rhombus [Exact] (
-        half_x: Scalar = 1.0, [0.0, BIG], "half-diagonal along x",
-        half_z: Scalar = 0.5, [0.0, BIG], "half-diagonal along z",
-        half_height: Scalar = 0.1, [0.0, BIG], "half-thickness along y",
-        radius: Scalar = 0.05, [0.0, BIG], "rounding of the outline",
+        half_x: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "half-diagonal along x",
+        half_z: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "half-diagonal along z",
+        half_height: Scalar = 0.1, [0.0, BIG], soft [0.0, 1.0], "half-thickness along y",
+        radius: Scalar = 0.05, [0.0, BIG], soft [0.0, 1.0], "rounding of the outline",
     ) => {
         let (ax, ay, az) = (p.x.abs(), p.y.abs(), p.z.abs());
         let bb = (half_x * half_x + half_z * half_z).max(S::splat(TINY));
@@ -279,7 +279,7 @@ crate::declare_family! {
     };
 
     /// A regular octahedron with vertices at distance `size` on the axes.
-    Octahedron [Exact] (size: Scalar = 1.0, [0.0, BIG], "centre-to-vertex distance") => {
+    Octahedron [Exact] (size: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "centre-to-vertex distance") => {
         let a = p.abs();
         let m = a.x + a.y + a.z - size;
         let three = S::splat(3.0);
@@ -294,14 +294,14 @@ crate::declare_family! {
 
     /// A regular octahedron like `Octahedron`, by the cheap plane bound (exact on the faces'
     /// normal cones, an underestimate near edges and vertices).
-    OctahedronBound [Bound] (size: Scalar = 1.0, [0.0, BIG], "centre-to-vertex distance")
+    OctahedronBound [Bound] (size: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "centre-to-vertex distance")
         => (p.x.abs() + p.y.abs() + p.z.abs() - size) * S::splat(0.577_350_269_189_625_8);
 
     /// A square pyramid: base of side `base` in the plane `y = -height / 2`, apex at
     /// `y = +height / 2`.
     Pyramid [Exact] (
-        base: Scalar = 1.0, [1e-6, BIG], "side length of the square base",
-        height: Scalar = 1.0, [0.0, BIG], "height (along y)",
+        base: Scalar = 1.0, [1e-6, BIG], soft [0.01, 4.0], "side length of the square base",
+        height: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "height (along y)",
     ) => {
         let inv = S::one() / base;
         let h = height * inv;
@@ -335,26 +335,26 @@ crate::declare_family! {
 
     /// A flat triangle with corners `a`, `b`, `c` (unsigned distance: it has no inside).
     Triangle [Exact] (
-        a: Vec3 = [0.0, 1.0, 0.0], [-BIG, BIG], "first corner",
-        b: Vec3 = [-0.866_025_403_784_438_6, -0.5, 0.0], [-BIG, BIG], "second corner",
-        c: Vec3 = [0.866_025_403_784_438_6, -0.5, 0.0], [-BIG, BIG], "third corner",
+        a: Vec3 = [0.0, 1.0, 0.0], [-BIG, BIG], soft [-4.0, 4.0], "first corner",
+        b: Vec3 = [-0.866_025_403_784_438_6, -0.5, 0.0], [-BIG, BIG], soft [-4.0, 4.0], "second corner",
+        c: Vec3 = [0.866_025_403_784_438_6, -0.5, 0.0], [-BIG, BIG], soft [-4.0, 4.0], "third corner",
     ) => triangle_dist2(p, a, b, c).sqrt();
 
     /// A flat quadrilateral with corners `a`, `b`, `c`, `d` in order, made of the triangles
     /// `abc` and `acd` (so a non-planar quad is a folded pair of triangles); unsigned.
     Quad [Exact] (
-        a: Vec3 = [-1.0, 0.0, -1.0], [-BIG, BIG], "first corner",
-        b: Vec3 = [1.0, 0.0, -1.0], [-BIG, BIG], "second corner",
-        c: Vec3 = [1.0, 0.0, 1.0], [-BIG, BIG], "third corner",
-        d: Vec3 = [-1.0, 0.0, 1.0], [-BIG, BIG], "fourth corner",
+        a: Vec3 = [-1.0, 0.0, -1.0], [-BIG, BIG], soft [-4.0, 4.0], "first corner",
+        b: Vec3 = [1.0, 0.0, -1.0], [-BIG, BIG], soft [-4.0, 4.0], "second corner",
+        c: Vec3 = [1.0, 0.0, 1.0], [-BIG, BIG], soft [-4.0, 4.0], "third corner",
+        d: Vec3 = [-1.0, 0.0, 1.0], [-BIG, BIG], soft [-4.0, 4.0], "fourth corner",
     ) => triangle_dist2(p, a, b, c).min(triangle_dist2(p, a, c, d)).sqrt();
 
     /// A lens (vesica) revolved about y: tips at `y = ±half_height`, widest (`half_width`) at
     /// `y = 0`. `half_width` is clamped to [half_height / 1000, half_height] (a lens of two
     /// equal arcs is never wider than tall).
     Vesica [Exact] (
-        half_width: Scalar = 0.5, [0.0, BIG], "radius at the equator",
-        half_height: Scalar = 1.0, [0.0, BIG], "distance from the centre to each tip",
+        half_width: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "radius at the equator",
+        half_height: Scalar = 1.0, [0.0, BIG], soft [0.0, 4.0], "distance from the centre to each tip",
     ) baked(bake_vesica) (arc_radius: Scalar, arc_offset: Scalar, tip: Scalar)
         => {
             let qx = len2(p.x, p.z);
@@ -365,7 +365,7 @@ crate::declare_family! {
 
     /// An infinite cone with its tip at the origin, opening towards +y with half-aperture
     /// `angle` degrees.
-    InfiniteCone [Exact] (angle: Scalar = 30.0, [0.0, 90.0], "half-aperture in degrees, from +y")
+    InfiniteCone [Exact] (angle: Scalar = 30.0, [0.0, 90.0], soft [0.0, 90.0], "half-aperture in degrees, from +y")
         baked(bake_sin_cos_first) (sin_a: Scalar, cos_a: Scalar)
         => {
             let qx = len2(p.x, p.z);
@@ -376,7 +376,7 @@ crate::declare_family! {
         };
 
     /// An infinite slab `|y| <= half_thickness`.
-    Slab [Exact] (half_thickness: Scalar = 0.5, [0.0, BIG], "half of the thickness (along y)")
+    Slab [Exact] (half_thickness: Scalar = 0.5, [0.0, BIG], soft [0.0, 2.0], "half of the thickness (along y)")
         => p.y.abs() - half_thickness;
 }
 

@@ -18,18 +18,18 @@ crate::declare_family! {
     fn apply(p: &mut V3<S>, k: &mut S) -> ();
 
     /// Moves the subtree by `offset`.
-    Translate [Exact] (offset: Vec3 = [0.0, 0.0, 0.0], [-BIG, BIG], "translation")
+    Translate [Exact] (offset: Vec3 = [0.0, 0.0, 0.0], [-BIG, BIG], soft [-4.0, 4.0], "translation")
         => { *p -= offset; };
 
     /// Rotates the subtree by `angle` degrees about `axis` (right-handed).
     Rotate [Exact] (
-        axis: Vec3 = [0.0, 1.0, 0.0], [-BIG, BIG], "rotation axis (normalised; zero means none)",
-        angle: Scalar = 0.0, [-36000.0, 36000.0], "angle in degrees",
+        axis: Vec3 = [0.0, 1.0, 0.0], [-BIG, BIG], soft [-1.0, 1.0], "rotation axis (normalised; zero means none)",
+        angle: Scalar = 0.0, [-36000.0, 36000.0], soft [-180.0, 180.0], "angle in degrees",
     ) baked(bake_rotation) (r0: Vec3, r1: Vec3, r2: Vec3)
         => { *p = V3::new(r0.dot(*p), r1.dot(*p), r2.dot(*p)); };
 
     /// Scales the subtree uniformly by `factor` about the origin.
-    Scale [Exact] (factor: Scalar = 1.0, [1e-6, BIG], "scale factor")
+    Scale [Exact] (factor: Scalar = 1.0, [1e-6, BIG], soft [0.1, 10.0], "scale factor")
         => { *p = *p / factor; *k *= factor; };
 
     /// Folds space with `abs` on each axis: mirrors the negative half onto the positive.
@@ -44,8 +44,8 @@ crate::declare_family! {
     /// Scales by `factor` about `centre`: `p = factor * p - centre * (factor - 1)`, the
     /// contraction step of an IFS. Divides the distance by the accumulated scale.
     ScaleAbout [Exact] (
-        factor: Scalar = 2.0, [1e-6, BIG], "scale factor",
-        centre: Vec3 = [1.0, 1.0, 1.0], [-BIG, BIG], "fixed point of the scaling",
+        factor: Scalar = 2.0, [1e-6, BIG], soft [0.1, 10.0], "scale factor",
+        centre: Vec3 = [1.0, 1.0, 1.0], [-BIG, BIG], soft [-4.0, 4.0], "fixed point of the scaling",
     ) => {
         *p = *p * factor - centre * (factor - S::one());
         *k /= factor;
@@ -53,7 +53,7 @@ crate::declare_family! {
 
     /// Mirrors the axes whose component of `axes` is nonzero: `p.x = |p.x|` and so on, so the
     /// subtree's positive half appears mirrored on the negative side.
-    Mirror [Bound] (axes: Vec3 = [1.0, 0.0, 0.0], [-BIG, BIG], "nonzero component = mirror that axis")
+    Mirror [Bound] (axes: Vec3 = [1.0, 0.0, 0.0], [-BIG, BIG], soft [-1.0, 1.0], "nonzero component = mirror that axis")
         => {
             let z0 = S::zero();
             *p = V3::new(
@@ -67,7 +67,7 @@ crate::declare_family! {
     /// axis); the subtree is evaluated in the cell containing the point, centred on it. A bound
     /// when the subtree fits in a cell and is mirror-symmetric about the cell planes; otherwise
     /// neighbouring copies are clipped at cell walls.
-    Repeat [Bound] (period: Vec3 = [2.0, 2.0, 2.0], [0.0, BIG], "cell size along x, y, z (0 = none)")
+    Repeat [Bound] (period: Vec3 = [2.0, 2.0, 2.0], [0.0, BIG], soft [0.0, 10.0], "cell size along x, y, z (0 = none)")
         => {
             let z0 = S::zero();
             let on = |c: S, per: S| S::select(per.gt(z0), c - per * (c / per.max(S::splat(1e-30))).round(), c);
@@ -78,8 +78,8 @@ crate::declare_family! {
     /// `[-count, count]` on each axis (`2 count + 1` copies; the fractional part of `count` is
     /// ignored).
     RepeatLimited [Bound] (
-        period: Vec3 = [2.0, 2.0, 2.0], [0.0, BIG], "cell size along x, y, z (0 = none)",
-        count: Vec3 = [1.0, 1.0, 1.0], [0.0, BIG], "largest cell index on each side of the origin",
+        period: Vec3 = [2.0, 2.0, 2.0], [0.0, BIG], soft [0.0, 10.0], "cell size along x, y, z (0 = none)",
+        count: Vec3 = [1.0, 1.0, 1.0], [0.0, BIG], soft [0.0, 10.0], "largest cell index on each side of the origin",
     ) => {
         let z0 = S::zero();
         let on = |c: S, per: S, n: S| {
@@ -95,8 +95,8 @@ crate::declare_family! {
     /// distance is multiplied by `safety`, which keeps it a bound where
     /// `|xz| <= (1 / safety - safety) / |rate|` (e.g. safety 0.5: `|xz| <= 1.5 / |rate|`).
     Twist [Safety] (
-        rate: Scalar = 1.0, [-BIG, BIG], "twist in radians per unit along y",
-        safety: Scalar = 0.5, [1e-6, 1.0], "distance multiplier in (0, 1]",
+        rate: Scalar = 1.0, [-BIG, BIG], soft [-4.0, 4.0], "twist in radians per unit along y",
+        safety: Scalar = 0.5, [1e-6, 1.0], soft [0.05, 1.0], "distance multiplier in (0, 1]",
     ) => {
         let (s, c) = (rate * p.y).sin_cos();
         *p = V3::new(c * p.x - s * p.z, p.y, s * p.x + c * p.z);
@@ -108,8 +108,8 @@ crate::declare_family! {
     /// `safety`, which keeps it a bound where `|xy| <= (1 / safety - 1) / |rate|`
     /// (e.g. safety 0.5: `|xy| <= 1 / |rate|`).
     Bend [Safety] (
-        rate: Scalar = 0.5, [-BIG, BIG], "bend in radians per unit along x",
-        safety: Scalar = 0.5, [1e-6, 1.0], "distance multiplier in (0, 1]",
+        rate: Scalar = 0.5, [-BIG, BIG], soft [-2.0, 2.0], "bend in radians per unit along x",
+        safety: Scalar = 0.5, [1e-6, 1.0], soft [0.05, 1.0], "distance multiplier in (0, 1]",
     ) => {
         let (s, c) = (rate * p.x).sin_cos();
         *p = V3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z);
@@ -119,14 +119,14 @@ crate::declare_family! {
     /// Elongates the subtree: its centre slab is stretched by `h` on each side of each axis
     /// (`p - clamp(p, -h, h)`). Exact outside the stretched core; inside the core the distance
     /// is that of the centre cross-section, a bound.
-    Elongate [Bound] (h: Vec3 = [0.5, 0.0, 0.0], [0.0, BIG], "stretch on each side along x, y, z")
+    Elongate [Bound] (h: Vec3 = [0.5, 0.0, 0.0], [0.0, BIG], soft [0.0, 2.0], "stretch on each side along x, y, z")
         => { *p -= p.clamp(-h, h); };
 
     /// Reflects points on the negative side of the plane `normal . p = offset` onto the
     /// positive side (the normal is normalised; zero means no fold).
     FoldPlane [Bound] (
-        normal: Vec3 = [1.0, 0.0, 0.0], [-BIG, BIG], "plane normal (the kept side)",
-        offset: Scalar = 0.0, [-BIG, BIG], "signed distance of the plane from the origin",
+        normal: Vec3 = [1.0, 0.0, 0.0], [-BIG, BIG], soft [-1.0, 1.0], "plane normal (the kept side)",
+        offset: Scalar = 0.0, [-BIG, BIG], soft [-2.0, 2.0], "signed distance of the plane from the origin",
     ) baked(bake_fold_plane) (unit: Vec3, offset: Scalar)
         => { fold_to_positive(p, unit, offset); };
 

@@ -51,12 +51,12 @@ crate::declare_family! {
     /// 1.4e-4 of pairs exceed 1 at safety 1, the worst seen grows with the sample: 13 in
     /// 600 000 pairs); the default `safety` 0.8 brings the exceeding fraction near 1e-4.
     Mandelbulb [Safety] (
-        power: Scalar = 8.0, [2.0, 32.0], "exponent of the spherical power map",
-        iterations: Int = 12.0, [1.0, 1000.0], "maximum iterations",
-        bailout: Scalar = 4.0, [1.0, 1e3], "escape radius (below 4 the estimate degrades)",
-        safety: Scalar = 0.8, [0.01, 1.0], "factor on the estimate (smaller: safer, slower)",
-        azimuth_offset: Scalar = 0.0, [-360.0, 360.0], "degrees added to the azimuth before it is multiplied by power",
-        polar_offset: Scalar = 0.0, [-360.0, 360.0], "degrees added to the polar angle (from +z) before it is multiplied by power",
+        power: Scalar = 8.0, [2.0, 32.0], soft [2.0, 16.0], "exponent of the spherical power map",
+        iterations: Int = 12.0, [1.0, 1000.0], soft [1.0, 24.0], "maximum iterations",
+        bailout: Scalar = 4.0, [1.0, 1e3], soft [2.0, 256.0], "escape radius (below 4 the estimate degrades)",
+        safety: Scalar = 0.8, [0.01, 1.0], soft [0.01, 1.0], "factor on the estimate (smaller: safer, slower)",
+        azimuth_offset: Scalar = 0.0, [-360.0, 360.0], soft [-180.0, 180.0], "degrees added to the azimuth before it is multiplied by power",
+        polar_offset: Scalar = 0.0, [-360.0, 360.0], soft [-180.0, 180.0], "degrees added to the polar angle (from +z) before it is multiplied by power",
     ) => {
         let (d, trap) = mandelbulb::mandelbulb(p, power, iterations, bailout, azimuth_offset, polar_offset);
         (d * safety, trap)
@@ -69,13 +69,13 @@ crate::declare_family! {
     /// Not a strict bound: `|z| / dr` overestimates by up to ~2.6x (worst of 600 000 random
     /// pairs); about 4e-3 of pairs exceed ratio 1 at safety 1, 2e-4 exceed 1/0.6.
     Mandelbox [Safety] (
-        scale: Scalar = -1.5, [-4.0, 4.0], "scale of each iteration (classic: 2 or -1.5)",
-        min_radius: Scalar = 0.5, [0.0, 4.0], "inner radius of the sphere fold",
-        fixed_radius: Scalar = 1.0, [0.01, 4.0], "outer radius of the sphere fold",
-        folding_limit: Scalar = 1.0, [0.0, 4.0], "half-width of the box fold",
-        iterations: Int = 12.0, [1.0, 1000.0], "maximum iterations",
-        bailout: Scalar = 1000.0, [2.0, 1e6], "escape radius",
-        safety: Scalar = 0.6, [0.01, 1.0], "factor on the estimate (smaller: safer, slower)",
+        scale: Scalar = -1.5, [-4.0, 4.0], soft [-4.0, 4.0], "scale of each iteration (classic: 2 or -1.5)",
+        min_radius: Scalar = 0.5, [0.0, 4.0], soft [0.0, 4.0], "inner radius of the sphere fold",
+        fixed_radius: Scalar = 1.0, [0.01, 4.0], soft [0.01, 4.0], "outer radius of the sphere fold",
+        folding_limit: Scalar = 1.0, [0.0, 4.0], soft [0.0, 4.0], "half-width of the box fold",
+        iterations: Int = 12.0, [1.0, 1000.0], soft [1.0, 24.0], "maximum iterations",
+        bailout: Scalar = 1000.0, [2.0, 1e6], soft [2.0, 10000.0], "escape radius",
+        safety: Scalar = 0.6, [0.01, 1.0], soft [0.01, 1.0], "factor on the estimate (smaller: safer, slower)",
     ) => {
         let (d, trap) = mandelbox::mandelbox(p, scale, min_radius, fixed_radius, folding_limit, iterations, bailout);
         (d * safety, trap)
@@ -85,18 +85,18 @@ crate::declare_family! {
     /// Fragmentarium): abs and sort folds, scale about `offset`, the middle cut along z; the
     /// estimate is the box distance of the final point divided by `scale^n`.
     Menger [Bound] (
-        iterations: Int = 6.0, [0.0, 1000.0], "depth of the sponge",
-        scale: Scalar = 3.0, [1.0, 10.0], "contraction factor (3: the Menger sponge)",
-        offset: Vec3 = [1.0, 1.0, 1.0], [-OFFSET_MAX, OFFSET_MAX], "corner the copies scale towards",
+        iterations: Int = 6.0, [0.0, 1000.0], soft [0.0, 20.0], "depth of the sponge",
+        scale: Scalar = 3.0, [1.0, 10.0], soft [1.0, 10.0], "contraction factor (3: the Menger sponge)",
+        offset: Vec3 = [1.0, 1.0, 1.0], [-OFFSET_MAX, OFFSET_MAX], soft [-10.0, 10.0], "corner the copies scale towards",
     ) => ifs::menger(p, iterations, scale, offset);
 
     /// The Sierpinski tetrahedron on the vertices (1,1,1), (-1,-1,1), (1,-1,-1), (-1,1,-1):
     /// plane folds `x+y<0`, `x+z<0`, `y+z<0`, scale about `offset`; the estimate is the
     /// tetrahedron distance bound of the final point divided by `scale^n`.
     Sierpinski [Bound] (
-        iterations: Int = 10.0, [0.0, 1000.0], "depth",
-        scale: Scalar = 2.0, [1.0, 10.0], "contraction factor (2: the Sierpinski tetrahedron)",
-        offset: Vec3 = [1.0, 1.0, 1.0], [-OFFSET_MAX, OFFSET_MAX], "vertex the copies scale towards",
+        iterations: Int = 10.0, [0.0, 1000.0], soft [0.0, 20.0], "depth",
+        scale: Scalar = 2.0, [1.0, 10.0], soft [1.0, 10.0], "contraction factor (2: the Sierpinski tetrahedron)",
+        offset: Vec3 = [1.0, 1.0, 1.0], [-OFFSET_MAX, OFFSET_MAX], soft [-10.0, 10.0], "vertex the copies scale towards",
     ) => ifs::sierpinski(p, iterations, scale, offset);
 
     /// The Koch snowflake as a wire: three Koch curves on an equilateral triangle (circumradius
@@ -106,9 +106,9 @@ crate::declare_family! {
     /// the depth-n polyline (exact at twist 0) minus a tube radius of `thickness` finest
     /// half-segments.
     Koch [Bound] (
-        iterations: Int = 5.0, [0.0, 1000.0], "generations of the curve",
-        twist: Scalar = 0.0, [-360.0, 360.0], "degrees each generation turns about its axis (0: planar)",
-        thickness: Scalar = 0.15, [0.0, 1.0], "tube radius, as a fraction of the finest half-segment",
+        iterations: Int = 5.0, [0.0, 1000.0], soft [0.0, 20.0], "generations of the curve",
+        twist: Scalar = 0.0, [-360.0, 360.0], soft [-180.0, 180.0], "degrees each generation turns about its axis (0: planar)",
+        thickness: Scalar = 0.15, [0.0, 1.0], soft [0.0, 1.0], "tube radius, as a fraction of the finest half-segment",
     ) baked(koch::bake_koch) (iterations: Int, twist_cos: Scalar, twist_sin: Scalar, thickness: Scalar)
         => koch::koch(p, iterations, twist_cos, twist_sin, thickness);
 
@@ -117,10 +117,10 @@ crate::declare_family! {
     /// estimate is the distance bound of the unit octahedron divided by `scale^n`. The defaults
     /// give the octahedron flake (six half-size copies at the vertices).
     KifsOctahedron [Bound] (
-        iterations: Int = 10.0, [0.0, 1000.0], "depth",
-        scale: Scalar = 2.0, [1.0, 10.0], "contraction factor",
-        offset: Vec3 = [1.0, 0.0, 0.0], [-OFFSET_MAX, OFFSET_MAX], "point the copies scale towards",
-        rotation: Vec3 = [0.0, 0.0, 0.0], [-360.0, 360.0], "Euler angles (degrees) applied each iteration",
+        iterations: Int = 10.0, [0.0, 1000.0], soft [0.0, 20.0], "depth",
+        scale: Scalar = 2.0, [1.0, 10.0], soft [1.0, 10.0], "contraction factor",
+        offset: Vec3 = [1.0, 0.0, 0.0], [-OFFSET_MAX, OFFSET_MAX], soft [-10.0, 10.0], "point the copies scale towards",
+        rotation: Vec3 = [0.0, 0.0, 0.0], [-360.0, 360.0], soft [-180.0, 180.0], "Euler angles (degrees) applied each iteration",
     ) baked(ifs::bake_kifs) (iterations: Int, scale: Scalar, offset: Vec3, r0: Vec3, r1: Vec3, r2: Vec3)
         => ifs::kifs_octahedron(p, iterations, scale, offset, [r0, r1, r2]);
 
@@ -129,10 +129,10 @@ crate::declare_family! {
     /// estimate is the distance bound of the unit icosahedron divided by `scale^n`. The defaults
     /// (scale 1 + golden ratio, offset a vertex) give the icosahedron flake.
     KifsIcosahedron [Bound] (
-        iterations: Int = 8.0, [0.0, 1000.0], "depth",
-        scale: Scalar = 2.618033988749895, [1.0, 10.0], "contraction factor",
-        offset: Vec3 = [0.5257311121191336, 0.0, 0.8506508083520399], [-OFFSET_MAX, OFFSET_MAX], "point the copies scale towards",
-        rotation: Vec3 = [0.0, 0.0, 0.0], [-360.0, 360.0], "Euler angles (degrees) applied each iteration",
+        iterations: Int = 8.0, [0.0, 1000.0], soft [0.0, 20.0], "depth",
+        scale: Scalar = 2.618033988749895, [1.0, 10.0], soft [1.0, 10.0], "contraction factor",
+        offset: Vec3 = [0.5257311121191336, 0.0, 0.8506508083520399], [-OFFSET_MAX, OFFSET_MAX], soft [-10.0, 10.0], "point the copies scale towards",
+        rotation: Vec3 = [0.0, 0.0, 0.0], [-360.0, 360.0], soft [-180.0, 180.0], "Euler angles (degrees) applied each iteration",
     ) baked(ifs::bake_kifs) (iterations: Int, scale: Scalar, offset: Vec3, r0: Vec3, r1: Vec3, r2: Vec3)
         => ifs::kifs_icosahedral(p, iterations, scale, offset, [r0, r1, r2], ifs::DODECA_VERTEX);
 
@@ -141,10 +141,10 @@ crate::declare_family! {
     /// `scale^n`. The defaults (scale 2 + golden ratio, offset a vertex) give the dodecahedron
     /// flake.
     KifsDodecahedron [Bound] (
-        iterations: Int = 6.0, [0.0, 1000.0], "depth",
-        scale: Scalar = 3.618033988749895, [1.0, 10.0], "contraction factor",
-        offset: Vec3 = [0.0, 0.35682208977308993, 0.9341723589627157], [-OFFSET_MAX, OFFSET_MAX], "point the copies scale towards",
-        rotation: Vec3 = [0.0, 0.0, 0.0], [-360.0, 360.0], "Euler angles (degrees) applied each iteration",
+        iterations: Int = 6.0, [0.0, 1000.0], soft [0.0, 20.0], "depth",
+        scale: Scalar = 3.618033988749895, [1.0, 10.0], soft [1.0, 10.0], "contraction factor",
+        offset: Vec3 = [0.0, 0.35682208977308993, 0.9341723589627157], [-OFFSET_MAX, OFFSET_MAX], soft [-10.0, 10.0], "point the copies scale towards",
+        rotation: Vec3 = [0.0, 0.0, 0.0], [-360.0, 360.0], soft [-180.0, 180.0], "Euler angles (degrees) applied each iteration",
     ) baked(ifs::bake_kifs) (iterations: Int, scale: Scalar, offset: Vec3, r0: Vec3, r1: Vec3, r2: Vec3)
         => ifs::kifs_icosahedral(p, iterations, scale, offset, [r0, r1, r2], ifs::ICO_VERTEX);
 }
