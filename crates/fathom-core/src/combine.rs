@@ -2,6 +2,13 @@
 //!
 //! `a` is the parent's accumulated value, `b` the child's. Hard combines keep the winner's
 //! material; smooth combines (polynomial smooth min/max with blend radius `k`) blend materials.
+//!
+//! `scale` is the distance scale at the parent (see `transforms`), as the distance modifiers
+//! get it: the blend radius is a length in the node's own frame, like its shapes' sizes, so a
+//! tile folded by an IFS loop blends the same at every level. (Applied in world units, a
+//! radius of 0.25 on the third level of a scale-3 loop was 27 of the tile's own units: the
+//! smooth subtraction's rise of `k / 4` lifted the whole tile off the surface and the scene
+//! vanished.)
 
 use crate::value::Value;
 
@@ -10,7 +17,7 @@ const BIG: f64 = 1e6;
 crate::declare_family! {
     /// A combine operator on the edge from a child to its parent.
     family Combine, noun "combine operator", table COMBINES;
-    fn combine(a: Value<S>, b: Value<S>) -> Value<S>;
+    fn combine(a: Value<S>, b: Value<S>, scale: S) -> Value<S>;
 
     /// Union: the nearer of the two.
     Union [Bound] () => Value::select(a.d.le(b.d), a, b);
@@ -25,21 +32,24 @@ crate::declare_family! {
     Intersect [Bound] () => Value::select(a.d.ge(b.d), a, b);
 
     /// Smooth union with blend radius `k`.
-    SmoothUnion [Bound] (k: Scalar = 0.25, [1e-6, BIG], "blend radius") => {
+    SmoothUnion [Bound] (k: Scalar = 0.25, [1e-6, BIG], soft [0.001, 2.0], "blend radius") => {
+        let k = k * scale;
         let h = (S::splat(0.5) + S::splat(0.5) * (b.d - a.d) / k).clamp(S::zero(), S::one());
         let d = S::lerp(b.d, a.d, h) - k * h * (S::one() - h);
         Value::blend(d, a, b, h)
     };
 
     /// Smooth subtraction with blend radius `k`: the child carved out of the parent.
-    SmoothSubtract [Bound] (k: Scalar = 0.25, [1e-6, BIG], "blend radius") => {
+    SmoothSubtract [Bound] (k: Scalar = 0.25, [1e-6, BIG], soft [0.001, 2.0], "blend radius") => {
+        let k = k * scale;
         let h = (S::splat(0.5) - S::splat(0.5) * (a.d + b.d) / k).clamp(S::zero(), S::one());
         let d = S::lerp(a.d, -b.d, h) + k * h * (S::one() - h);
         Value::blend(d, b, a, h)
     };
 
     /// Smooth intersection with blend radius `k`.
-    SmoothIntersect [Bound] (k: Scalar = 0.25, [1e-6, BIG], "blend radius") => {
+    SmoothIntersect [Bound] (k: Scalar = 0.25, [1e-6, BIG], soft [0.001, 2.0], "blend radius") => {
+        let k = k * scale;
         let h = (S::splat(0.5) - S::splat(0.5) * (b.d - a.d) / k).clamp(S::zero(), S::one());
         let d = S::lerp(b.d, a.d, h) + k * h * (S::one() - h);
         Value::blend(d, a, b, h)
@@ -66,8 +76,37 @@ mod tests {
         c.combine::<f64>(
             Value::solid(sphere(p), 0.0, 1.0),
             Value::solid(cube(p), 1.0, 2.0),
+            1.0,
             a,
         )
+    }
+
+    /// Blending in a frame scaled by `s` (the distances arriving already multiplied by `s`)
+    /// gives `s` times the blend of the unscaled frame: the radius is a length of the node's
+    /// own frame, so a tile inside an IFS loop blends alike at every level.
+    #[test]
+    fn a_smooth_combine_blends_in_the_node_s_own_frame() {
+        let v = |d: f64, id: f64| Value::solid(d, id, 0.0);
+        let k = [0.25];
+        for c in [
+            Combine::SmoothUnion,
+            Combine::SmoothSubtract,
+            Combine::SmoothIntersect,
+        ] {
+            for (da, db) in [(0.1, 0.05), (-0.2, 0.1), (0.3, -0.1)] {
+                let unscaled = c.combine::<f64>(v(da, 0.0), v(db, 1.0), 1.0, &k);
+                let s = 1.0 / 27.0;
+                let scaled = c.combine::<f64>(v(da * s, 0.0), v(db * s, 1.0), s, &k);
+                assert!(
+                    (scaled.d - unscaled.d * s).abs() < 1e-12,
+                    "{}: {} vs {}",
+                    c.def().name,
+                    scaled.d,
+                    unscaled.d * s
+                );
+                assert!((scaled.blend - unscaled.blend).abs() < 1e-12);
+            }
+        }
     }
 
     #[test]
@@ -98,24 +137,24 @@ mod tests {
     fn combines_hand_values() {
         let v = |d: f64, id: f64| Value::solid(d, id, 0.0);
         let none: [f64; 0] = [];
-        let u = Combine::Union.combine::<f64>(v(1.0, 0.0), v(0.5, 1.0), &none);
+        let u = Combine::Union.combine::<f64>(v(1.0, 0.0), v(0.5, 1.0), 1.0, &none);
         assert_eq!((u.d, u.id), (0.5, 1.0));
-        let s = Combine::Subtract.combine::<f64>(v(-1.0, 0.0), v(-0.3, 1.0), &none);
+        let s = Combine::Subtract.combine::<f64>(v(-1.0, 0.0), v(-0.3, 1.0), 1.0, &none);
         assert_eq!((s.d, s.id), (0.3, 1.0));
-        let i = Combine::Intersect.combine::<f64>(v(-1.0, 0.0), v(-0.3, 1.0), &none);
+        let i = Combine::Intersect.combine::<f64>(v(-1.0, 0.0), v(-0.3, 1.0), 1.0, &none);
         assert_eq!((i.d, i.id), (-0.3, 1.0));
         // Equal inputs: the smooth union dips by k/4, the smooth intersection rises by k/4,
         // with an even blend.
         let k = [0.4];
-        let su = Combine::SmoothUnion.combine::<f64>(v(1.0, 0.0), v(1.0, 1.0), &k);
+        let su = Combine::SmoothUnion.combine::<f64>(v(1.0, 0.0), v(1.0, 1.0), 1.0, &k);
         assert!((su.d - 0.9).abs() < 1e-12 && (su.blend - 0.5).abs() < 1e-12);
-        let si = Combine::SmoothIntersect.combine::<f64>(v(1.0, 0.0), v(1.0, 1.0), &k);
+        let si = Combine::SmoothIntersect.combine::<f64>(v(1.0, 0.0), v(1.0, 1.0), 1.0, &k);
         assert!((si.d - 1.1).abs() < 1e-12);
         // a = 1, b = -1: a - (-b) = 0, so the subtraction blends evenly and rises by k/4.
-        let ss = Combine::SmoothSubtract.combine::<f64>(v(1.0, 0.0), v(-1.0, 1.0), &k);
+        let ss = Combine::SmoothSubtract.combine::<f64>(v(1.0, 0.0), v(-1.0, 1.0), 1.0, &k);
         assert!((ss.d - 1.1).abs() < 1e-12);
         // Far apart, the smooth ones equal the hard ones.
-        let su = Combine::SmoothUnion.combine::<f64>(v(3.0, 0.0), v(1.0, 1.0), &k);
+        let su = Combine::SmoothUnion.combine::<f64>(v(3.0, 0.0), v(1.0, 1.0), 1.0, &k);
         assert_eq!((su.d, su.id, su.blend), (1.0, 1.0, 0.0));
     }
 
@@ -134,11 +173,13 @@ mod tests {
                     <F32x8 as Real>::splat(id),
                 )
             };
-            let got = c.combine::<F32x8>(mk(&da, 0.0), mk(&db, 1.0), &a);
+            let got =
+                c.combine::<F32x8>(mk(&da, 0.0), mk(&db, 1.0), <F32x8 as Real>::splat(0.5), &a);
             for i in 0..8 {
                 let want = c.combine::<f64>(
                     Value::solid(da[i], 0.0, 0.0),
                     Value::solid(db[i], 1.0, 1.0),
+                    0.5,
                     &a,
                 );
                 let l = |x: F32x8| <F32x8 as Real>::lane(x, i);

@@ -235,6 +235,7 @@ fn run<S: Real, T: Slot<S>>(
                 values.push(T::from_value(Combine::ALL[i].combine(
                     va.to_value(),
                     b.to_value(),
+                    cur.k,
                     a,
                 )));
             }

@@ -54,7 +54,7 @@ fn eval_node(n: &Node, mut pt: Point<f64>, next_id: &mut u32) -> Value<f64> {
         v = c
             .combine
             .kind
-            .combine(v, cv, &baked(c.combine.kind.def(), &c.combine.params));
+            .combine(v, cv, pt.k, &baked(c.combine.kind.def(), &c.combine.params));
     }
     for op in &n.ops {
         if let DomainOp::Modifier(m) = op.kind {

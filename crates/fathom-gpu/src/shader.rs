@@ -146,9 +146,9 @@ pub fn dispatch() -> String {
             "return r;",
         ),
         (
-            "fn op_comb(i: u32, a: u32, va: Val, vb: Val) -> Val",
+            "fn op_comb(i: u32, a: u32, va: Val, vb: Val, k: f32) -> Val",
             "var r = va;",
-            "r = {f}(va, vb{args});",
+            "r = {f}(va, vb, k{args});",
             "return r;",
         ),
     ];

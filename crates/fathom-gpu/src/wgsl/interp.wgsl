@@ -81,7 +81,7 @@ fn eval_tape(pw: vec3f) -> Val {
             } else if fam == 4u {
                 top.d = op_mod(i, a, top.d, k);
             } else if fam == 5u {
-                top = op_comb(i, a, vals[nv - 2u], top);
+                top = op_comb(i, a, vals[nv - 2u], top, k);
                 nv -= 1u;
             } else if fam <= 3u {
                 break;
