@@ -45,6 +45,9 @@ pub enum GpuError {
     /// Waiting for the GPU took too long.
     #[error("the GPU did not finish within {0} s; the scene may be too expensive for this device")]
     Timeout(u64),
+    /// The caller abandoned the frame between two bands ([`crate::Renderer::render_in_bands`]).
+    #[error("the frame was cancelled")]
+    Cancelled,
     /// Bad input (a scene that does not compile, a zero-sized image).
     #[error("{0}")]
     Invalid(String),

@@ -109,6 +109,8 @@ pub(crate) struct Globals {
     /// Lights, materials, eyes, prepass on.
     pub dims2: [u32; 4],
     pub lights: [GpuLight; 8],
+    /// The output rows `[x, y)` the depth and colour passes of one submit cover.
+    pub rows: [u32; 4],
 }
 
 /// `struct Light` of trace.wgsl.
@@ -166,6 +168,7 @@ pub(crate) fn rust_layouts() -> Vec<Layout> {
             dims: [u32; 4],
             dims2: [u32; 4],
             lights: [GpuLight; 8],
+            rows: [u32; 4],
         }),
         layout!(GpuLight {
             dir: [f32; 4],
@@ -304,10 +307,42 @@ impl Renderer {
         camera: &Camera,
         o: &RenderOptions,
     ) -> Result<(Frame, RenderStats), GpuError> {
+        self.render_in_bands(scene, tape, camera, o, u32::MAX, &mut |_, _| true)
+    }
+
+    /// Renders like [`Renderer::render`], but submits the depth and colour passes `band`
+    /// output rows at a time (a multiple of 8) and waits for each: after every band but the
+    /// last, `each(rows_done, rows)` is called, and `false` abandons the frame
+    /// ([`GpuError::Cancelled`]). On a software adapter a frame can take seconds; bands let a
+    /// window show its progress and drop it as soon as it goes stale. On a GPU a band costs a
+    /// submission and a wait, so callers ask for bands only where a frame is slow.
+    pub fn render_in_bands(
+        &mut self,
+        scene: &Scene,
+        tape: &Tape,
+        camera: &Camera,
+        o: &RenderOptions,
+        band: u32,
+        each: &mut dyn FnMut(u32, u32) -> bool,
+    ) -> Result<(Frame, RenderStats), GpuError> {
         let start = Instant::now();
-        self.submit(scene, tape, camera, o)?;
+        let globals = self.prepare(scene, tape, camera, o)?;
+        let (_, oh) = o.projection.output_size(o.width, o.height);
+        let band = band.max(8) / 8 * 8;
         let gpu_start = Instant::now();
-        // Generous: a software adapter compiles the pipelines on their first dispatch.
+        let mut y0 = 0;
+        while y0 < oh {
+            let y1 = oh.min(y0.saturating_add(band));
+            self.submit_passes(&globals, o, y0 == 0, (y0, y1));
+            if y1 < oh {
+                // Generous: a software adapter compiles the pipelines on their first dispatch.
+                self.gpu.wait(900)?;
+                if !each(y1, oh) {
+                    return Err(GpuError::Cancelled);
+                }
+            }
+            y0 = y1;
+        }
         self.gpu.wait(900)?;
         let ms_gpu = gpu_start.elapsed().as_secs_f64() * 1e3;
         let t = self.targets.as_ref().expect("submit built the targets");
@@ -352,7 +387,9 @@ impl Renderer {
         camera: &Camera,
         o: &RenderOptions,
     ) -> Result<&wgpu::Texture, GpuError> {
-        self.submit(scene, tape, camera, o)?;
+        let globals = self.prepare(scene, tape, camera, o)?;
+        let (_, oh) = o.projection.output_size(o.width, o.height);
+        self.submit_passes(&globals, o, true, (0, oh));
         Ok(&self
             .targets
             .as_ref()
@@ -360,14 +397,14 @@ impl Renderer {
             .texture)
     }
 
-    /// Checks the request, writes the globals and submits the passes.
-    fn submit(
+    /// Checks the request, builds the targets and computes the globals of a frame.
+    fn prepare(
         &mut self,
         scene: &Scene,
         tape: &Tape,
         camera: &Camera,
         o: &RenderOptions,
-    ) -> Result<(), GpuError> {
+    ) -> Result<Globals, GpuError> {
         if o.width == 0 || o.height == 0 {
             return Err(GpuError::Invalid(format!(
                 "image size {}x{} is empty",
@@ -459,13 +496,28 @@ impl Renderer {
                 o.prepass as u32,
             ],
             lights,
+            rows: [0, 0, 0, 0],
         };
-        let eyes = o.projection.eyes();
         self.targets(o)?;
-        let t = self.targets.as_ref().unwrap();
+        Ok(g)
+    }
+
+    /// Submits the passes of one band of output rows `[y0, y1)`: the prepass too (for the
+    /// whole frame, with the counters reset) when `first`. The writes of the globals are
+    /// ordered with the submissions, so each band reads its own rows.
+    fn submit_passes(&self, g: &Globals, o: &RenderOptions, first: bool, (y0, y1): (u32, u32)) {
+        let eyes = o.projection.eyes();
+        let (ow, _) = o.projection.output_size(o.width, o.height);
+        let t = self.targets.as_ref().expect("prepare built the targets");
         let q = &self.gpu.queue;
+        let g = Globals {
+            rows: [y0, y1, 0, 0],
+            ..*g
+        };
         q.write_buffer(&t.globals, 0, bytemuck::bytes_of(&g));
-        q.write_buffer(&t.counters, 0, &[0u8; 16]);
+        if first {
+            q.write_buffer(&t.counters, 0, &[0u8; 16]);
+        }
         let mut enc = self
             .gpu
             .device
@@ -474,7 +526,7 @@ impl Renderer {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
             pass.set_bind_group(0, &self.tape_group, &[]);
             pass.set_bind_group(1, &t.group, &[]);
-            if o.prepass {
+            if o.prepass && first {
                 for (l, b) in PREPASS_LEVELS.iter().enumerate() {
                     pass.set_pipeline(&self.pipes.prepass[l]);
                     let cw = o.width.div_ceil(*b);
@@ -482,13 +534,13 @@ impl Renderer {
                     pass.dispatch_workgroups(cw.div_ceil(8), ch.div_ceil(8), 1);
                 }
             }
+            let rows = y1 - y0;
             pass.set_pipeline(&self.pipes.depth);
-            pass.dispatch_workgroups(ow.div_ceil(8), oh.div_ceil(8), 1);
+            pass.dispatch_workgroups(ow.div_ceil(8), rows.div_ceil(8), 1);
             pass.set_pipeline(&self.pipes.shade);
-            pass.dispatch_workgroups(ow.div_ceil(8), oh.div_ceil(8), 1);
+            pass.dispatch_workgroups(ow.div_ceil(8), rows.div_ceil(8), 1);
         }
         q.submit([enc.finish()]);
-        Ok(())
     }
 
     /// The displayable image of the last render (8-bit sRGB), for a window to show.

@@ -211,3 +211,50 @@ fn the_texture_left_for_a_window_is_the_image_a_readback_renders() {
         );
     }
 }
+
+/// A frame rendered in bands of rows (how a window on a software adapter shows progress and
+/// drops a stale frame) is the frame rendered at once, bit for bit, in every projection; a
+/// band callback that answers `false` abandons the frame with `Cancelled` after that band.
+#[test]
+fn a_frame_in_bands_is_the_whole_frame_and_a_cancel_stops_it() {
+    let mut r = renderer();
+    let scene = presets::load("menger").unwrap();
+    let tape = Tape::compile(&scene).unwrap();
+    r.set_tape(&tape).unwrap();
+    for projection in [
+        Projection::Mono,
+        Projection::SideBySide {
+            eye_separation: 0.1,
+        },
+        Projection::Ods {
+            eye_separation: 0.1,
+        },
+    ] {
+        let o = RenderOptions {
+            projection,
+            ..mono(72, 50)
+        };
+        let (whole, _) = r.render(&scene, &tape, &scene.camera, &o).unwrap();
+        let mut bands = Vec::new();
+        let (banded, _) = r
+            .render_in_bands(&scene, &tape, &scene.camera, &o, 16, &mut |done, total| {
+                bands.push((done, total));
+                true
+            })
+            .unwrap();
+        assert_eq!(to_rgb8(&whole), to_rgb8(&banded), "{projection:?}");
+        assert_eq!(whole.depth, banded.depth, "{projection:?}");
+        let rows = whole.height;
+        let expect: Vec<(u32, u32)> = (1..rows.div_ceil(16)).map(|i| (16 * i, rows)).collect();
+        assert_eq!(bands, expect, "{projection:?}");
+    }
+    let mut calls = 0;
+    let e = r
+        .render_in_bands(&scene, &tape, &scene.camera, &mono(72, 50), 16, &mut |_, _| {
+            calls += 1;
+            false
+        })
+        .unwrap_err();
+    assert!(matches!(e, fathom_gpu::GpuError::Cancelled), "{e}");
+    assert_eq!(calls, 1, "the frame stopped at its first band");
+}

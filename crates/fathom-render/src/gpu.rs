@@ -5,6 +5,7 @@
 //! region's crop. Regions are supported by rendering the whole frame and cropping it (the
 //! same pixels as the whole render, at the whole render's cost).
 
+use crate::control::Control;
 use crate::request::RenderRequest;
 use crate::session::{Counters, Rendered};
 use crate::stats::{DeCounts, Stats, Timings};
@@ -14,6 +15,10 @@ use fathom_gpu::{GpuError, RenderOptions, Renderer};
 use fathom_trace::post::{self, PostParams};
 use fathom_trace::stereo;
 use std::time::Instant;
+
+/// Rows per band of a watched frame on a software adapter: about a second of lavapipe's time
+/// on the heavier presets at window sizes.
+pub const SOFTWARE_BAND_ROWS: u32 = 32;
 
 pub(crate) struct GpuBackend {
     renderer: Renderer,
@@ -61,7 +66,10 @@ impl GpuBackend {
         }
     }
 
-    /// Renders, reads back and finishes the frame.
+    /// Renders, reads back and finishes the frame. With a cancel token or a progress hook in
+    /// `control` on a software adapter (whose frames take seconds), the frame goes in bands of
+    /// [`SOFTWARE_BAND_ROWS`] rows: progress after each, and a cancel takes effect at the next.
+    #[allow(clippy::too_many_arguments)]
     pub fn render(
         &mut self,
         scene: &Scene,
@@ -69,11 +77,28 @@ impl GpuBackend {
         generation: u64,
         camera: &Camera,
         req: &RenderRequest,
+        control: &Control,
         counters: &mut Counters,
     ) -> Result<Rendered, GpuError> {
         self.upload(tape, generation, counters)?;
         let opts = Self::options(req, false);
-        let (frame, s) = self.renderer.render(scene, tape, camera, &opts)?;
+        let watched = control.cancel.is_some() || control.progress.is_some();
+        let band = if watched && self.renderer.gpu().is_software() {
+            SOFTWARE_BAND_ROWS
+        } else {
+            u32::MAX
+        };
+        let (frame, s) = self.renderer.render_in_bands(
+            scene,
+            tape,
+            camera,
+            &opts,
+            band,
+            &mut |done, total| {
+                control.report(done as usize, total as usize);
+                !control.cancelled()
+            },
+        )?;
         let t_post = Instant::now();
         let projection = req.projection;
         let cam = projection.frame(camera);

@@ -209,8 +209,10 @@ impl Session {
                     self.tape_generation,
                     camera,
                     req,
+                    control,
                     &mut self.counters,
                 ) {
+                    Err(fathom_gpu::GpuError::Cancelled) => return Err(RenderError::Cancelled),
                     Err(fathom_gpu::GpuError::TooDeep { .. }) => {
                         let pool = pool(&mut self.pool, req.threads)?;
                         let mut r = trace(&self.tape, &scene, camera, req, control, pool)?;

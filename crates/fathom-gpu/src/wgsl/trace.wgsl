@@ -25,6 +25,7 @@ struct Globals {
     dims: vec4u,       // view width, view height, projection (0 mono, 1 side-by-side, 2 ODS), max steps
     dims2: vec4u,      // lights, materials, eyes, 0
     lights: array<Light, 8>,
+    rows: vec4u,       // the output rows [x, y) the depth and colour passes of this submit cover
 }
 
 // One pixel of the G-buffer read back into a Frame.
@@ -237,9 +238,10 @@ fn out_size() -> vec2u {
 
 // dims2.w = 1 when the prepass ran.
 @compute @workgroup_size(8, 8)
-fn depth(@builtin(global_invocation_id) gid: vec3u) {
+fn depth(@builtin(global_invocation_id) gid0: vec3u) {
     let size = out_size();
-    if gid.x >= size.x || gid.y >= size.y {
+    let gid = vec3u(gid0.x, gid0.y + g.rows.x, gid0.z);
+    if gid.x >= size.x || gid.y >= min(size.y, g.rows.y) {
         return;
     }
     let e = split_eye(gid.x, gid.y);
@@ -307,9 +309,10 @@ fn to_srgb(c: f32) -> f32 {
 }
 
 @compute @workgroup_size(8, 8)
-fn shade(@builtin(global_invocation_id) gid: vec3u) {
+fn shade(@builtin(global_invocation_id) gid0: vec3u) {
     let size = out_size();
-    if gid.x >= size.x || gid.y >= size.y {
+    let gid = vec3u(gid0.x, gid0.y + g.rows.x, gid0.z);
+    if gid.x >= size.x || gid.y >= min(size.y, g.rows.y) {
         return;
     }
     let i = gid.y * size.x + gid.x;
