@@ -128,12 +128,31 @@ impl ViewSettings {
     }
 }
 
-/// A message in the status bar.
+/// What a status message is about: a newer message from the same source replaces an older
+/// error (a fixed file clears the reload error it had).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum NoteSource {
+    General,
+    /// Opening, reloading and saving the scene file.
+    File,
+}
+
+/// A message in the status bar (and in the Messages window's history).
 struct Note {
     text: String,
     error: bool,
     at: Instant,
+    source: NoteSource,
+    /// Dismissed from the status bar (kept in the history).
+    dismissed: bool,
 }
+
+/// How long an information message stays in the status bar (errors stay until dismissed or
+/// followed by a newer message).
+const NOTE_SECONDS: u64 = 8;
+
+/// Messages kept in the history.
+const MAX_NOTES: usize = 64;
 
 /// The screenshot dialog's fields.
 struct ShotDialog {
@@ -212,6 +231,23 @@ pub struct ExplorerApp {
     pub show_live: bool,
     /// Seconds since the previous frame.
     frame_dt: f64,
+    /// The document as last opened, saved or loaded from a preset: edits since make it dirty.
+    saved: Scene,
+    /// The preset the document came from, if it did.
+    preset: Option<&'static str>,
+    /// The title last given to the window.
+    title: String,
+    /// The "unsaved changes" dialog is open (a close was asked for with unsaved edits).
+    quit_dialog: bool,
+    /// Close without asking (the user chose to discard, or a scripted run ends).
+    allow_close: bool,
+    /// Close once the save the dialog asked for has succeeded.
+    close_after_save: bool,
+    /// Whether the window's GPU is a software adapter (lavapipe, llvmpipe), and its name.
+    pub software_adapter: Option<String>,
+    /// The places last written to the frame log.
+    logged_places: Vec<crate::script::Place>,
+    show_messages: bool,
 }
 
 impl ExplorerApp {
@@ -238,13 +274,21 @@ impl ExplorerApp {
             .map_err(|e| e.to_string())?;
         let mut backend = opts.backend.unwrap_or(Backend::Trace);
         let mut notes = Vec::new();
+        let mut software_adapter = None;
         if let Some(rs) = &cc.wgpu_render_state {
             let info = rs.adapter.get_info();
             let software = info.device_type == wgpu::DeviceType::Cpu;
+            if software {
+                software_adapter = Some(info.name.clone());
+            }
             if opts.backend.is_none() && !software {
                 backend = Backend::Gpu;
             }
-            if backend == Backend::Gpu {
+            // On a software adapter the GPU tracer gets a device of its own (the session
+            // opens one on its first GPU frame): a frame takes seconds there, and on the
+            // window's queue it would hold up every window frame (and the surface's
+            // reconfiguration) until it finished.
+            if backend == Backend::Gpu && !software {
                 match gpu_renderer(rs) {
                     Ok(r) => worker.set_gpu(r),
                     Err(e) => {
@@ -255,6 +299,8 @@ impl ExplorerApp {
                             ),
                             error: true,
                             at: Instant::now(),
+                            source: NoteSource::General,
+                            dismissed: false,
                         });
                     }
                 }
@@ -263,7 +309,23 @@ impl ExplorerApp {
         let script = Script::new(opts.frames, opts.screenshot.clone(), opts.log.as_deref())?;
         let camera = CameraController::new(&opts.scene.camera);
         let watch = opts.path.clone().map(Watch::new);
+        let preset = opts
+            .path
+            .is_none()
+            .then(|| opts.name.strip_prefix("preset "))
+            .flatten()
+            .and_then(|n| PRESETS.iter().find(|p| p.name == n))
+            .map(|p| p.name);
         Ok(ExplorerApp {
+            saved: opts.scene.clone(),
+            preset,
+            title: String::new(),
+            quit_dialog: false,
+            allow_close: false,
+            close_after_save: false,
+            software_adapter,
+            logged_places: Vec::new(),
+            show_messages: false,
             file_camera: opts.path.as_ref().map(|_| opts.scene.camera.clone()),
             scene: opts.scene.clone(),
             generation: 0,
@@ -330,18 +392,51 @@ impl ExplorerApp {
     }
 
     fn note(&mut self, text: impl Into<String>, error: bool) {
+        self.note_from(NoteSource::General, text, error);
+    }
+
+    /// A message from `source`. A success from a source clears that source's errors: once a
+    /// file reloads (or another opens), its old parse errors are gone, not stacked.
+    fn note_from(&mut self, source: NoteSource, text: impl Into<String>, error: bool) {
         let text = text.into();
         if error {
             eprintln!("fathom: {text}");
+        } else if source != NoteSource::General {
+            self.notes.retain(|n| !(n.error && n.source == source));
         }
         self.notes.push(Note {
             text,
             error,
             at: Instant::now(),
+            source,
+            dismissed: false,
         });
-        if self.notes.len() > 8 {
+        if self.notes.len() > MAX_NOTES {
             self.notes.remove(0);
         }
+    }
+
+    /// The message the status bar shows: the newest one, while it is an error not dismissed
+    /// or an information younger than [`NOTE_SECONDS`]. An older message never comes back
+    /// when a newer one expires.
+    fn status_note(&self) -> Option<&Note> {
+        self.notes.last().filter(|n| {
+            !n.dismissed && (n.error || n.at.elapsed() < Duration::from_secs(NOTE_SECONDS))
+        })
+    }
+
+    /// Whether the document has edits that were not saved.
+    pub fn dirty(&self) -> bool {
+        self.scene != self.saved
+    }
+
+    /// The window's title: the document's name, and `*` while it has unsaved edits.
+    pub fn title(&self) -> String {
+        format!(
+            "fathom - {}{}",
+            self.name,
+            if self.dirty() { " *" } else { "" }
+        )
     }
 
     /// The camera frames are rendered from: the flown camera, or the camera the bindings
@@ -448,8 +543,17 @@ impl ExplorerApp {
     /// Keeps an edit made by the panels this frame (or refuses it), recording one undo step
     /// per gesture.
     fn commit(&mut self, ctx: &egui::Context, before: Scene) {
+        // A gesture is one press of the pointer (a slider jumps to the press on its first
+        // frame, before egui calls it a drag, and the drag goes on under another id), or the
+        // keyboard's edits of one focused field.
+        let press = ctx.input(|i| {
+            i.pointer
+                .any_down()
+                .then(|| i.pointer.press_origin())
+                .flatten()
+        });
         if self.scene == before {
-            if ctx.dragged_id().is_none() {
+            if press.is_none() {
                 self.gesture = None;
             }
             return;
@@ -459,7 +563,10 @@ impl ExplorerApp {
             self.scene = before;
             return;
         }
-        let gesture = ctx.dragged_id().or_else(|| ctx.memory(|m| m.focused()));
+        let gesture = press
+            .map(|p| egui::Id::unique(("press", p.x.to_bits(), p.y.to_bits())))
+            .or_else(|| ctx.dragged_id())
+            .or_else(|| ctx.memory(|m| m.focused()));
         if gesture.is_none() || gesture != self.gesture {
             let label = if self.edit_label.is_empty() {
                 "edit".to_string()
@@ -494,13 +601,19 @@ impl ExplorerApp {
             Ok(s) => {
                 self.camera = CameraController::new(&s.camera);
                 self.file_camera = Some(s.camera.clone());
+                self.saved = s.clone();
                 self.replace_scene(s, Some("open file"));
                 self.path = Some(path.to_path_buf());
                 self.watch = Some(Watch::new(path.to_path_buf()));
                 self.name = path.display().to_string();
-                self.note(format!("opened {}", path.display()), false);
+                self.preset = None;
+                self.note_from(
+                    NoteSource::File,
+                    format!("opened {}", path.display()),
+                    false,
+                );
             }
-            Err(e) => self.note(format!("{e} (the scene was kept)"), true),
+            Err(e) => self.note_from(NoteSource::File, format!("{e} (the scene was kept)"), true),
         }
     }
 
@@ -516,20 +629,32 @@ impl ExplorerApp {
                 self.watch = Some(w);
                 self.file_camera = Some(s.camera.clone());
                 self.name = path.display().to_string();
-                self.note(format!("saved {}", path.display()), false);
+                self.preset = None;
+                self.saved = self.scene.clone();
+                self.note_from(NoteSource::File, format!("saved {}", path.display()), false);
+                if self.close_after_save {
+                    self.allow_close = true;
+                }
             }
-            Err(e) => self.note(e.to_string(), true),
+            Err(e) => {
+                self.close_after_save = false;
+                self.note_from(NoteSource::File, e.to_string(), true)
+            }
         }
     }
 
-    fn load_preset(&mut self, name: &str) {
+    fn load_preset(&mut self, name: &'static str) {
         match presets::load(name) {
             Ok(s) => {
                 self.camera = CameraController::new(&s.camera);
-                self.replace_scene(s, Some("load preset"));
+                self.saved = s.clone();
+                self.replace_scene(s, Some(&format!("load preset {name}")));
                 self.name = format!("preset {name}");
+                self.preset = Some(name);
                 self.path = None;
                 self.watch = None;
+                // Errors about the file left behind are moot now.
+                self.note_from(NoteSource::File, format!("loaded preset {name}"), false);
             }
             Err(e) => self.note(e.to_string(), true),
         }
@@ -598,6 +723,7 @@ impl ExplorerApp {
                 self.pending_edit = None;
                 self.note(format!("{why}; started a new render worker"), true);
                 if self.settings.backend == Backend::Gpu
+                    && self.software_adapter.is_none()
                     && let Some(rs) = &self.render_state
                 {
                     match gpu_renderer(rs) {
@@ -647,12 +773,21 @@ impl ExplorerApp {
                         self.camera = CameraController::new(&s.camera);
                         self.file_camera = Some(s.camera.clone());
                     }
+                    self.saved = s.clone();
                     if s != self.scene {
                         self.replace_scene(s, Some("reload from disk"));
-                        self.note(format!("reloaded {}", path.display()), false);
                     }
+                    self.note_from(
+                        NoteSource::File,
+                        format!("reloaded {}", path.display()),
+                        false,
+                    );
                 }
-                Err(e) => self.note(format!("{e} (the scene on screen was kept)"), true),
+                Err(e) => self.note_from(
+                    NoteSource::File,
+                    format!("{e} (the scene on screen was kept)"),
+                    true,
+                ),
             }
         }
         let dropped: Vec<PathBuf> = ctx.input(|i| {
@@ -683,15 +818,24 @@ impl ExplorerApp {
     fn shortcuts(&mut self, ctx: &egui::Context) {
         use egui::{Key, KeyboardShortcut, Modifiers};
         let sc = |m, k| KeyboardShortcut::new(m, k);
-        let (undo, redo, redo2, save, open) = ctx.input_mut(|i| {
+        let (undo, redo, redo2, save, open, quit, shot_dialog) = ctx.input_mut(|i| {
             (
                 i.consume_shortcut(&sc(Modifiers::COMMAND, Key::Z)),
                 i.consume_shortcut(&sc(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)),
                 i.consume_shortcut(&sc(Modifiers::COMMAND, Key::Y)),
                 i.consume_shortcut(&sc(Modifiers::COMMAND, Key::S)),
                 i.consume_shortcut(&sc(Modifiers::COMMAND, Key::O)),
+                i.consume_shortcut(&sc(Modifiers::COMMAND, Key::Q)),
+                i.consume_shortcut(&sc(Modifiers::COMMAND, Key::F12)),
             )
         });
+        if quit {
+            // Through the window's close request, so the unsaved-changes check sees it.
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
+        if shot_dialog {
+            self.shot_dialog.open = true;
+        }
         if undo {
             self.undo();
         }
@@ -736,7 +880,7 @@ impl ExplorerApp {
             (i.key_pressed(Key::F12), digits, i.modifiers.command)
         });
         if f12 {
-            self.shot_dialog.open = true;
+            self.quick_shot();
         }
         for d in digits {
             if ctrl {
@@ -773,12 +917,17 @@ impl ExplorerApp {
                         self.browser.open(BrowseFor::Save, self.path.as_deref());
                         ui.close();
                     }
-                    if ui.button("Screenshot... (F12)").clicked() {
+                    if ui.button("Screenshot of the view (F12)").clicked() {
+                        self.quick_shot();
+                        ui.close();
+                    }
+                    if ui.button("Screenshot... (Ctrl+F12)").clicked() {
                         self.shot_dialog.open = true;
                         ui.close();
                     }
-                    if ui.button("Quit").clicked() {
+                    if ui.button("Quit (Ctrl+Q)").clicked() {
                         ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                        ui.close();
                     }
                 });
                 ui.menu_button("Edit", |ui| {
@@ -825,6 +974,7 @@ impl ExplorerApp {
                     ui.checkbox(&mut self.show_panels, "Side panels (F2)");
                     ui.checkbox(&mut self.show_overlay, "Stats overlay (F3)");
                     ui.checkbox(&mut self.show_live, "Timeline and bindings (F4)");
+                    ui.checkbox(&mut self.show_messages, "Messages");
                     if ui.button("Fly (leave orbit)").clicked() {
                         self.camera.mode = Mode::Fly;
                         ui.close();
@@ -847,23 +997,26 @@ impl ExplorerApp {
     fn status_bar(&mut self, ui: &mut egui::Ui) {
         egui::Panel::bottom("status").show(ui, |ui| {
             ui.horizontal_wrapped(|ui| {
-                self.notes
-                    .retain(|n| n.error || n.at.elapsed() < Duration::from_secs(8));
-                match self.notes.last() {
-                    Some(n) if n.error => {
-                        ui.colored_label(egui::Color32::from_rgb(255, 120, 110), &n.text);
+                let shown = self.status_note().map(|n| (n.text.clone(), n.error));
+                match &shown {
+                    Some((text, true)) => {
+                        ui.colored_label(egui::Color32::from_rgb(255, 120, 110), text);
                     }
-                    Some(n) => {
-                        ui.label(&n.text);
+                    Some((text, false)) => {
+                        ui.label(text);
                     }
                     None => {
-                        ui.label(&self.name);
+                        ui.label(self.title());
                     }
                 }
-                if self.notes.last().is_some_and(|n| n.error)
+                if shown.is_some_and(|(_, error)| error)
                     && ui.small_button("dismiss").clicked()
+                    && let Some(n) = self.notes.last_mut()
                 {
-                    self.notes.pop();
+                    n.dismissed = true;
+                }
+                if self.notes.len() > 1 && ui.small_button("messages").clicked() {
+                    self.show_messages = true;
                 }
                 for s in &self.shots {
                     ui.add(
@@ -962,11 +1115,11 @@ impl ExplorerApp {
                     ui.heading("Scene");
                     let mut pick = None;
                     egui::ComboBox::new("preset", "preset")
-                        .selected_text("choose...")
+                        .selected_text(self.preset.unwrap_or("choose..."))
                         .show_ui(ui, |ui| {
                             for p in PRESETS {
                                 if ui
-                                    .selectable_label(false, p.name)
+                                    .selectable_label(self.preset == Some(p.name), p.name)
                                     .on_hover_text(p.description)
                                     .clicked()
                                 {
@@ -984,8 +1137,8 @@ impl ExplorerApp {
                     ui.separator();
                     let mut notes = Vec::new();
                     ui.collapsing("IFS loop", |ui| {
-                        if tree::ifs_editor(ui, &mut self.scene.ifs, &mut notes) {
-                            self.edit_label = "edit the IFS loop".into();
+                        if let Some(what) = tree::ifs_editor(ui, &mut self.scene.ifs, &mut notes) {
+                            self.edit_label = format!("IFS loop: {what}");
                         }
                     });
                     ui.collapsing("Lights", |ui| {
@@ -1038,9 +1191,9 @@ impl ExplorerApp {
                     let path = self.selected.clone();
                     if let Some(n) = tree::node_at_mut(&mut self.scene.root, &path) {
                         let label = tree::node_label(n, path.is_empty());
-                        ui.label(format!("{label} at root{}", path_text(&path)));
-                        if tree::node_inspector(ui, n, &path, &mut notes) {
-                            self.edit_label = format!("edit {label}");
+                        ui.label(format!("{label} at {}", tree::path_text(&path)));
+                        if let Some(what) = tree::node_inspector(ui, n, &path, &mut notes) {
+                            self.edit_label = format!("{label}: {what}");
                         }
                     }
                     for n in notes {
@@ -1054,17 +1207,30 @@ impl ExplorerApp {
     }
 
     fn renderer_settings(&mut self, ui: &mut egui::Ui) {
+        let gpu_label = match &self.software_adapter {
+            Some(_) => "GPU tracer (software adapter: slow)",
+            None => "GPU tracer",
+        };
+        let gpu_tip = match &self.software_adapter {
+            Some(name) => format!(
+                "The window's graphics adapter is {name}, which runs shaders on the CPU: the \
+                 GPU tracer works but is far slower than the CPU tracer here. Its frames show \
+                 their progress and are cancelled as soon as you switch away."
+            ),
+            None => "The WGSL tape interpreter on the window's GPU.".to_string(),
+        };
         let s = &mut self.settings;
         egui::ComboBox::new("backend", "renderer")
             .selected_text(match s.backend {
                 Backend::Trace => "CPU tracer",
-                Backend::Gpu => "GPU tracer",
+                Backend::Gpu => gpu_label,
                 Backend::Octree => "octree",
                 Backend::Volume => "volume (cloud)",
             })
             .show_ui(ui, |ui| {
                 ui.selectable_value(&mut s.backend, Backend::Trace, "CPU tracer");
-                ui.selectable_value(&mut s.backend, Backend::Gpu, "GPU tracer");
+                ui.selectable_value(&mut s.backend, Backend::Gpu, gpu_label)
+                    .on_hover_text(gpu_tip);
                 ui.selectable_value(&mut s.backend, Backend::Octree, "octree");
                 ui.selectable_value(&mut s.backend, Backend::Volume, "volume (cloud)")
                     .on_hover_text(
@@ -1145,6 +1311,7 @@ impl ExplorerApp {
             let rect = ui.available_rect_before_wrap().round_to_pixels(ppp);
             self.viewport_rect = rect;
             let r = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+            crate::script::place("viewport", "viewport".into(), &r);
             self.viewport_px = (
                 (rect.width() * ppp).round().max(0.0) as u32,
                 (rect.height() * ppp).round().max(0.0) as u32,
@@ -1175,7 +1342,7 @@ impl ExplorerApp {
             if let Some(t) = &self.viewport.texture {
                 painter.image(
                     t.id(),
-                    rect,
+                    fit(rect, t.size_vec2()),
                     egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
                     egui::Color32::WHITE,
                 );
@@ -1211,10 +1378,7 @@ impl ExplorerApp {
             ));
             lines.push(format!(
                 "scale {:.2}  prepass {:.1}  trace {:.1}  post {:.1} ms",
-                self.viewport.scale.scale(),
-                st.ms.prepass,
-                st.ms.trace_and_shade,
-                st.ms.post
+                s.scale, st.ms.prepass, st.ms.trace_and_shade, st.ms.post
             ));
             lines.push(format!(
                 "DE/px {:.2}{}",
@@ -1234,6 +1398,14 @@ impl ExplorerApp {
                     }
                 ));
             }
+        }
+        if self.settings.backend == Backend::Gpu
+            && let Some(name) = &self.software_adapter
+        {
+            lines.push(format!("software adapter ({name}): CPU speed"));
+        }
+        if let Some(p) = self.viewport.progress() {
+            lines.push(format!("rendering... {:.0} %", p * 100.0));
         }
         if let Some(ms) = self.viewport.full_after_still_ms {
             lines.push(format!("full resolution {ms:.0} ms after stopping"));
@@ -1276,9 +1448,34 @@ impl ExplorerApp {
         if self.show_help {
             egui::Window::new("Keys and mouse")
                 .open(&mut self.show_help)
+                .resizable(false)
                 .show(ctx, |ui| {
-                    ui.monospace(input::KEY_HELP);
+                    // Never wrapped: each row of the table is one line.
+                    ui.add(
+                        egui::Label::new(egui::RichText::new(input::KEY_HELP).monospace()).extend(),
+                    );
                 });
+        }
+        if self.show_messages {
+            let mut open = true;
+            egui::Window::new("Messages")
+                .open(&mut open)
+                .default_width(480.0)
+                .show(ctx, |ui| {
+                    egui::ScrollArea::vertical().show(ui, |ui| {
+                        for n in self.notes.iter().rev() {
+                            if n.error {
+                                ui.colored_label(egui::Color32::from_rgb(255, 120, 110), &n.text);
+                            } else {
+                                ui.label(&n.text);
+                            }
+                        }
+                    });
+                });
+            self.show_messages = open;
+        }
+        if self.quit_dialog {
+            self.unsaved_dialog(ctx);
         }
         let mut start = false;
         if self.shot_dialog.open {
@@ -1313,6 +1510,78 @@ impl ExplorerApp {
         }
     }
 
+    /// The dialog asking what to do with unsaved edits when the window is asked to close.
+    fn unsaved_dialog(&mut self, ctx: &egui::Context) {
+        let mut choice = None;
+        egui::Window::new("Unsaved changes")
+            .collapsible(false)
+            .resizable(false)
+            .anchor(egui::Align2::CENTER_CENTER, egui::vec2(0.0, 0.0))
+            .show(ctx, |ui| {
+                ui.label(format!(
+                    "{} has edits that were not saved. Save them before closing?",
+                    self.name
+                ));
+                ui.horizontal(|ui| {
+                    for (text, c) in [
+                        ("Save", QuitChoice::Save),
+                        ("Discard", QuitChoice::Discard),
+                        ("Cancel", QuitChoice::Cancel),
+                    ] {
+                        let r = ui.button(text);
+                        crate::script::place("button", text.into(), &r);
+                        if r.clicked() {
+                            choice = Some(c);
+                        }
+                    }
+                });
+            });
+        if ctx.input(|i| i.key_pressed(egui::Key::Escape)) {
+            choice = Some(QuitChoice::Cancel);
+        }
+        match choice {
+            Some(QuitChoice::Save) => {
+                self.quit_dialog = false;
+                self.close_after_save = true;
+                match self.path.clone() {
+                    Some(p) => self.save(&p),
+                    None => self.browser.open(BrowseFor::Save, None),
+                }
+                if self.allow_close {
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            }
+            Some(QuitChoice::Discard) => {
+                self.quit_dialog = false;
+                self.allow_close = true;
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+            Some(QuitChoice::Cancel) => {
+                self.quit_dialog = false;
+                self.close_after_save = false;
+            }
+            None => {}
+        }
+    }
+
+    /// F12: the view as the viewport shows it (the live scene with the bindings' values of
+    /// this moment, the flown camera, the stereo layout) at the viewport's size, written to
+    /// the next free `fathom-shot-NNN.png` in the working directory.
+    pub fn quick_shot(&mut self) {
+        let path = (1..10000)
+            .map(|i| PathBuf::from(format!("fathom-shot-{i:03}.png")))
+            .find(|p| !p.exists() && !self.shots.iter().any(|s| &s.path == p))
+            .unwrap_or_else(|| PathBuf::from("fathom-shot.png"));
+        let (w, h) = self.viewport_px;
+        let (w, h) = match self.settings.stereo {
+            Stereo::Mono => (w, h),
+            Stereo::SideBySide => (w / 2, h / 2),
+            Stereo::Ods => (w, h / 2),
+        };
+        let req = self.shot_request(w.max(16), h.max(16), 1, self.settings.stereo);
+        self.start_shot_of(req, path);
+    }
+
     /// The offline request for a screenshot of the current view.
     pub fn shot_request(
         &self,
@@ -1341,13 +1610,20 @@ impl ExplorerApp {
     fn start_shot(&mut self) {
         let d = &self.shot_dialog;
         let req = self.shot_request(d.width, d.height, d.supersample, d.stereo);
+        let path = PathBuf::from(d.path.trim());
+        self.start_shot_of(req, path);
+    }
+
+    /// Renders the view offline with `req` into `path`: the live scene (what the viewport
+    /// shows, the bindings' values of this moment included), not the document.
+    fn start_shot_of(&mut self, req: RenderRequest, path: PathBuf) {
         if let Err(e) = req.validate() {
             self.note(format!("screenshot: {e}"), true);
             return;
         }
-        let path = PathBuf::from(d.path.trim());
+        self.note(format!("rendering {}...", path.display()), false);
         self.shots.push(Shot::start(
-            self.scene.clone(),
+            self.live_scene.clone(),
             self.view_camera(),
             req,
             path,
@@ -1363,8 +1639,70 @@ impl ExplorerApp {
         self.viewport
             .schedule(&self.worker, key, &cam, &base, self.viewport_px);
         self.frames += 1;
+        let title = self.title();
+        if title != self.title {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.title = title;
+        }
+        let places = crate::script::take_places(ctx);
+        let places = (places != self.logged_places).then(|| {
+            self.logged_places = places.clone();
+            places
+        });
+        let node = tree::node_at(&self.scene.root, &self.selected);
+        let status = self.status_note().map(|n| n.text.clone());
         let line = FrameLog {
             frame: self.frames,
+            t_ms: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0.0, |d| d.as_secs_f64() * 1e3),
+            title: &self.title,
+            dirty: self.dirty(),
+            dialog: if self.quit_dialog {
+                Some("unsaved changes")
+            } else if self.shot_dialog.open {
+                Some("screenshot")
+            } else {
+                None
+            },
+            selected: tree::path_text(&self.selected),
+            selected_label: node
+                .map(|n| tree::node_label(n, self.selected.is_empty()))
+                .unwrap_or_default(),
+            selected_params: node
+                .map(|n| {
+                    let mut off = 0;
+                    use fathom_core::registry::Family;
+                    n.shape
+                        .kind
+                        .def()
+                        .params
+                        .iter()
+                        .map(|p| {
+                            let w = p.kind.width();
+                            let v = n.shape.params[off..off + w].to_vec();
+                            off += w;
+                            (p.name, v)
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+            undo: self.history.next_undo(),
+            status: status.as_deref(),
+            shown_view: self.viewport.shown.as_ref().map(|s| s.key),
+            view: key,
+            shown_scale: self.viewport.shown.as_ref().map(|s| s.scale),
+            mode: match self.camera.mode {
+                Mode::Fly => "fly",
+                Mode::Orbit { .. } => "orbit",
+            },
+            pivot: match self.camera.mode {
+                Mode::Fly => None,
+                Mode::Orbit { pivot } => Some(pivot.to_array()),
+            },
+            software_adapter: self.settings.backend == Backend::Gpu
+                && self.software_adapter.is_some(),
+            places,
             frame_ms: self.ui_ms,
             render_scale: self.viewport.scale.scale(),
             renderer: self
@@ -1400,7 +1738,7 @@ impl ExplorerApp {
             if let Some(p) = self.script.screenshot.clone() {
                 let (w, h) = self.viewport_px;
                 let req = self.shot_request(w.max(16), h.max(16), 1, self.settings.stereo);
-                let r = crate::shot::render(self.scene.clone(), &cam, &req, &p, &|_| {});
+                let r = crate::shot::render(self.live_scene.clone(), &cam, &req, &p, &|_| {});
                 match r {
                     Ok(()) => eprintln!("fathom: wrote {}", p.display()),
                     Err(e) => {
@@ -1409,6 +1747,7 @@ impl ExplorerApp {
                     }
                 }
             }
+            self.allow_close = true;
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
         }
         // Keep drawing while something moves or renders; otherwise the worker wakes us.
@@ -1432,6 +1771,24 @@ impl ExplorerApp {
     }
 }
 
+/// What the unsaved-changes dialog was answered.
+#[derive(Clone, Copy)]
+enum QuitChoice {
+    Save,
+    Discard,
+    Cancel,
+}
+
+/// The largest rectangle of `size`'s aspect ratio centred in `rect` (a stereo pair's eyes keep
+/// their shape; the rest of the viewport stays dark).
+fn fit(rect: egui::Rect, size: egui::Vec2) -> egui::Rect {
+    if size.x <= 0.0 || size.y <= 0.0 || rect.width() <= 0.0 || rect.height() <= 0.0 {
+        return rect;
+    }
+    let s = (rect.width() / size.x).min(rect.height() / size.y);
+    egui::Rect::from_center_size(rect.center(), size * s)
+}
+
 /// A GPU renderer on the window's device.
 fn gpu_renderer(rs: &egui_wgpu::RenderState) -> Result<fathom_gpu::Renderer, fathom_gpu::GpuError> {
     let info = rs.adapter.get_info();
@@ -1439,13 +1796,13 @@ fn gpu_renderer(rs: &egui_wgpu::RenderState) -> Result<fathom_gpu::Renderer, fat
     fathom_gpu::Renderer::new(gpu)
 }
 
-fn path_text(p: &NodePath) -> String {
-    p.iter().map(|i| format!(".children[{i}]")).collect()
-}
-
 impl eframe::App for ExplorerApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
+        if ctx.input(|i| i.viewport().close_requested()) && self.dirty() && !self.allow_close {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.quit_dialog = true;
+        }
         let now = Instant::now();
         let dt = now.duration_since(self.last_frame).as_secs_f64();
         self.ui_ms = dt * 1e3;

@@ -1,7 +1,12 @@
 //! Scripted runs: `--frames N` (run N window frames and exit), `--screenshot OUT.png` (then
 //! render the view offline to OUT.png) and `--log FILE.jsonl` (one JSON line per window frame:
-//! frame time, render scale, renderer, refinement stage, camera, edit latency, OSC counters,
-//! the bound parameters' values, the timeline's time), for tests and for measuring.
+//! wall-clock time, frame time, render scale, renderer, refinement stage, camera, edit latency,
+//! OSC counters, the bound parameters' values, the timeline's time, the selected node, the
+//! title and whether the document has unsaved edits, and, whenever it changed, where the
+//! viewport, the tree's rows and the parameter widgets were drawn), for tests and for measuring.
+//!
+//! The places let a test drive the real window with real X input (`fathom-xdrive`): click the
+//! row of `root.children[1]`, drag the slider of `Torus.minor`.
 
 use crate::worker::Stage;
 use fathom_core::Camera;
@@ -9,10 +14,74 @@ use serde::Serialize;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// Where a widget was drawn this frame: its kind (`tree`, `param`, `button`), its name (a
+/// node path, `Torus.minor`, a button's text) and its rectangle in window pixels (x, y,
+/// width, height).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Place {
+    pub kind: &'static str,
+    pub name: String,
+    pub rect: [f32; 4],
+}
+
+/// The places recorded in the current frame, kept in the context's temporary data.
+#[derive(Clone, Default)]
+struct Places(Vec<Place>);
+
+/// Records where a widget of `kind` named `name` was drawn this frame (for the frame log).
+pub fn place(kind: &'static str, name: String, r: &egui::Response) {
+    let ppp = r.ctx.pixels_per_point();
+    let rect = [
+        r.rect.min.x * ppp,
+        r.rect.min.y * ppp,
+        r.rect.width() * ppp,
+        r.rect.height() * ppp,
+    ];
+    r.ctx.data_mut(|d| {
+        d.get_temp_mut_or_default::<Places>(egui::Id::NULL)
+            .0
+            .push(Place { kind, name, rect })
+    });
+}
+
+/// The places recorded since the last call (and forgets them).
+pub fn take_places(ctx: &egui::Context) -> Vec<Place> {
+    ctx.data_mut(|d| std::mem::take(&mut d.get_temp_mut_or_default::<Places>(egui::Id::NULL).0))
+}
+
 /// One line of the frame log.
 #[derive(Serialize)]
 pub struct FrameLog<'a> {
     pub frame: u64,
+    /// Wall-clock time of the line, ms since the Unix epoch (to put X events and frames on
+    /// one time line).
+    pub t_ms: f64,
+    /// The window's title (it says the document's name, and `*` for unsaved edits).
+    pub title: &'a str,
+    /// Whether the document has edits not saved (or, for a preset, any edits).
+    pub dirty: bool,
+    /// The dialog open over the window, if any (`unsaved changes`, `screenshot`, ...).
+    pub dialog: Option<&'a str>,
+    /// The selected node's path (`root.children[0]`) and label.
+    pub selected: String,
+    pub selected_label: String,
+    /// The selected node's shape parameters, by name.
+    pub selected_params: Vec<(&'static str, Vec<f64>)>,
+    /// What Ctrl+Z would undo.
+    pub undo: Option<&'a str>,
+    /// The status bar's message.
+    pub status: Option<&'a str>,
+    /// The view key of the frame on screen and of the view asked for now: they differ while
+    /// the screen lags the camera (a drag's latency is until they first differ from before).
+    pub shown_view: Option<u64>,
+    pub view: u64,
+    /// The resolution scale of the frame on screen (1: full resolution).
+    pub shown_scale: Option<f64>,
+    /// The camera mode: `fly` or `orbit`, and the orbit's pivot.
+    pub mode: &'static str,
+    pub pivot: Option<[f64; 3]>,
+    /// Whether the renderer runs on a software adapter (the GPU tracer on lavapipe).
+    pub software_adapter: bool,
     /// Time since the previous window frame, ms.
     pub frame_ms: f64,
     pub render_scale: f64,
@@ -38,6 +107,8 @@ pub struct FrameLog<'a> {
     pub bound: Vec<crate::live::BoundValue>,
     /// The timeline's time when a flight path drives the view.
     pub path_time: Option<f64>,
+    /// Where the widgets were drawn, when that changed since the last line.
+    pub places: Option<Vec<Place>>,
 }
 
 /// The scripted run's settings and log file.

@@ -11,7 +11,7 @@ use fathom_core::combine::Combine;
 use fathom_core::limits;
 use fathom_core::primitives::Primitive;
 use fathom_core::registry::Family;
-use fathom_core::scene::{Call, DomainOp, Ifs, Material, Node, Scene, Shape};
+use fathom_core::scene::{Call, Ifs, Material, Node, Scene, Shape};
 use fathom_core::transforms::Transform;
 
 /// A node's place: child indices from the root (empty: the root).
@@ -157,13 +157,25 @@ pub fn apply(scene: &mut Scene, a: &TreeAction, selected: &mut NodePath) -> Resu
     Ok(())
 }
 
-/// Draws the tree; returns the actions asked for.
+/// Draws the tree; returns the actions asked for. Each row's place goes to the frame log
+/// ([`crate::script::place`]) as `tree` `root.children[i]...`.
 pub fn tree_ui(ui: &mut egui::Ui, root: &Node, selected: &NodePath) -> Vec<TreeAction> {
     let mut actions = Vec::new();
     node_row(ui, root, &mut Vec::new(), selected, &mut actions);
     actions
 }
 
+/// A node's path as written in the window and the log: `root`, `root.children[1]`, ...
+pub fn path_text(p: &[usize]) -> String {
+    std::iter::once("root".to_string())
+        .chain(p.iter().map(|i| format!(".children[{i}]")))
+        .collect()
+}
+
+/// One row: a label that selects its node when clicked, is dragged to move the node, and takes
+/// a dragged node as a new child when one is dropped on it. One widget senses both the click
+/// and the drag: a separate drag handle laid over the label took the clicks, so rows could not
+/// be selected in the real window.
 fn node_row(
     ui: &mut egui::Ui,
     n: &Node,
@@ -175,43 +187,53 @@ fn node_row(
     let is_root = path.is_empty();
     let label = node_label(n, is_root);
     let header = |ui: &mut egui::Ui, actions: &mut Vec<TreeAction>| {
-        let (_, dropped) = ui.dnd_drop_zone::<NodePath, ()>(egui::Frame::NONE, |ui| {
-            ui.horizontal(|ui| {
-                let r = ui
-                    .dnd_drag_source(id.with("drag"), path.clone(), |ui| {
-                        ui.selectable_label(selected == path, &label)
-                    })
-                    .inner;
-                if r.clicked() {
-                    actions.push(TreeAction::Select(path.clone()));
-                }
-                r.context_menu(|ui| {
-                    if ui.button("Add child").clicked() {
-                        actions.push(TreeAction::AddChild(path.clone()));
-                        ui.close();
-                    }
-                    if !is_root {
-                        for (text, a) in [
-                            ("Duplicate", TreeAction::Duplicate(path.clone())),
-                            ("Move up", TreeAction::MoveUp(path.clone())),
-                            ("Move down", TreeAction::MoveDown(path.clone())),
-                            ("Remove", TreeAction::Remove(path.clone())),
-                        ] {
-                            if ui.button(text).clicked() {
-                                actions.push(a);
-                                ui.close();
-                            }
-                        }
-                    }
-                });
-            });
-        });
-        if let Some(p) = dropped {
+        let r = ui
+            .selectable_label(selected == path, &label)
+            .interact(egui::Sense::drag());
+        crate::script::place("tree", path_text(path), &r);
+        if r.clicked() {
+            actions.push(TreeAction::Select(path.clone()));
+        }
+        if !is_root {
+            r.dnd_set_drag_payload(path.clone());
+        }
+        if let Some(p) = r.dnd_hover_payload::<NodePath>()
+            && *p != *path
+        {
+            ui.painter().rect_stroke(
+                r.rect.expand(1.0),
+                2.0,
+                ui.visuals().selection.stroke,
+                egui::StrokeKind::Outside,
+            );
+        }
+        if let Some(p) = r.dnd_release_payload::<NodePath>()
+            && *p != *path
+        {
             actions.push(TreeAction::Reparent {
                 node: (*p).clone(),
                 parent: path.clone(),
             });
         }
+        r.context_menu(|ui| {
+            if ui.button("Add child").clicked() {
+                actions.push(TreeAction::AddChild(path.clone()));
+                ui.close();
+            }
+            if !is_root {
+                for (text, a) in [
+                    ("Duplicate", TreeAction::Duplicate(path.clone())),
+                    ("Move up", TreeAction::MoveUp(path.clone())),
+                    ("Move down", TreeAction::MoveDown(path.clone())),
+                    ("Remove", TreeAction::Remove(path.clone())),
+                ] {
+                    if ui.button(text).clicked() {
+                        actions.push(a);
+                        ui.close();
+                    }
+                }
+            }
+        });
     };
     if n.children.is_empty() {
         ui.horizontal(|ui| {
@@ -253,32 +275,49 @@ pub fn node_buttons(ui: &mut egui::Ui, selected: &NodePath) -> Vec<TreeAction> {
     actions
 }
 
-/// The inspector of one node. Returns whether it changed.
+/// What an edit in a panel did, in words for the undo history (`set minor`, `add operator
+/// Rotate`); `None`: nothing changed.
+pub type Edit = Option<String>;
+
+/// Keeps the first description of an edit made this frame.
+pub fn keep(slot: &mut Edit, e: Edit) {
+    if slot.is_none() {
+        *slot = e;
+    }
+}
+
+/// The inspector of one node; says what changed.
 pub fn node_inspector(
     ui: &mut egui::Ui,
     n: &mut Node,
     path: &NodePath,
     notes: &mut Vec<String>,
-) -> bool {
-    let mut changed = false;
+) -> Edit {
+    let mut edit = None;
     ui.push_id(("inspector", path.clone()), |ui| {
         ui.strong("Shape");
-        changed |= entry_picker::<Shape>(ui, "shape", "shape", &mut n.shape);
-        changed |= call_params(ui, &mut n.shape, notes);
+        keep(
+            &mut edit,
+            entry_picker::<Shape>(ui, "shape", "shape", &mut n.shape),
+        );
+        keep(&mut edit, call_params(ui, &mut n.shape, notes));
         if !path.is_empty() {
             ui.separator();
             ui.strong("Combine with the parent");
-            changed |= entry_picker::<Combine>(ui, "combine", "combine", &mut n.combine);
-            changed |= call_params(ui, &mut n.combine, notes);
+            keep(
+                &mut edit,
+                entry_picker::<Combine>(ui, "combine", "combine", &mut n.combine),
+            );
+            keep(&mut edit, call_params(ui, &mut n.combine, notes));
         }
         ui.separator();
         ui.strong("Domain operators (in order)");
-        changed |= op_list(ui, &mut n.ops, notes);
+        keep(&mut edit, call_list(ui, &mut n.ops, notes));
         ui.separator();
         ui.strong("Material");
-        changed |= material_editor(ui, &mut n.material);
+        keep(&mut edit, material_editor(ui, &mut n.material));
     });
-    changed
+    edit
 }
 
 /// An ordered list of calls of family `K`: each entry's picker and parameters, with buttons to
@@ -287,15 +326,15 @@ fn call_list<K: Family>(
     ui: &mut egui::Ui,
     ops: &mut Vec<Call<K>>,
     notes: &mut Vec<String>,
-) -> bool {
-    let mut changed = false;
+) -> Edit {
+    let mut edit = None;
     let mut remove = None;
     let mut swap = None;
     let n = ops.len();
     for (i, op) in ops.iter_mut().enumerate() {
         ui.push_id(i, |ui| {
             ui.horizontal(|ui| {
-                changed |= entry_picker::<K>(ui, "op", "", op);
+                keep(&mut edit, entry_picker::<K>(ui, "op", "operator", op));
                 if ui.small_button("^").on_hover_text("earlier").clicked() && i > 0 {
                     swap = Some((i, i - 1));
                 }
@@ -307,17 +346,25 @@ fn call_list<K: Family>(
                 }
             });
             ui.indent("params", |ui| {
-                changed |= call_params(ui, op, notes);
+                keep(&mut edit, call_params(ui, op, notes));
             });
         });
     }
     if let Some((a, b)) = swap {
+        let name = ops[a].kind.def().name;
         ops.swap(a, b);
-        changed = true;
+        keep(
+            &mut edit,
+            Some(format!(
+                "move operator {name} {}",
+                if b < a { "earlier" } else { "later" }
+            )),
+        );
     }
     if let Some(i) = remove {
+        let name = ops[i].kind.def().name;
         ops.remove(i);
-        changed = true;
+        keep(&mut edit, Some(format!("remove operator {name}")));
     }
     if ops.len() < limits::MAX_OPS_PER_LIST {
         let mut add: Option<K> = None;
@@ -336,19 +383,15 @@ fn call_list<K: Family>(
             });
         if let Some(k) = add {
             ops.push(Call::new(k));
-            changed = true;
+            keep(&mut edit, Some(format!("add operator {}", k.def().name)));
         }
     }
-    changed
-}
-
-fn op_list(ui: &mut egui::Ui, ops: &mut Vec<Call<DomainOp>>, notes: &mut Vec<String>) -> bool {
-    call_list(ui, ops, notes)
+    edit
 }
 
 /// The root's IFS loop: on or off, iterations, and its ordered operators.
-pub fn ifs_editor(ui: &mut egui::Ui, ifs: &mut Option<Ifs>, notes: &mut Vec<String>) -> bool {
-    let mut changed = false;
+pub fn ifs_editor(ui: &mut egui::Ui, ifs: &mut Option<Ifs>, notes: &mut Vec<String>) -> Edit {
+    let mut edit = None;
     let mut on = ifs.is_some();
     if ui
         .checkbox(&mut on, "IFS loop around the tree")
@@ -359,50 +402,79 @@ pub fn ifs_editor(ui: &mut egui::Ui, ifs: &mut Option<Ifs>, notes: &mut Vec<Stri
             iterations: 4,
             ops: vec![Call::new(Transform::ALL[0])],
         });
-        changed = true;
+        edit = Some(format!("turn the loop {}", if on { "on" } else { "off" }));
     }
     if let Some(ifs) = ifs {
         let mut it = ifs.iterations;
-        if ui
-            .add(egui::Slider::new(&mut it, 0..=limits::MAX_IFS_ITERATIONS).text("iterations"))
-            .changed()
-        {
+        let r =
+            ui.add(egui::Slider::new(&mut it, 0..=limits::MAX_IFS_ITERATIONS).text("iterations"));
+        crate::script::place("param", "IFS.iterations".into(), &r);
+        if r.changed() {
             ifs.iterations = it;
-            changed = true;
+            keep(&mut edit, Some("set iterations".into()));
         }
         ui.push_id("ifs ops", |ui| {
-            changed |= call_list(ui, &mut ifs.ops, notes);
+            keep(&mut edit, call_list(ui, &mut ifs.ops, notes));
         });
     }
-    changed
+    edit
 }
 
-/// The material of a node (ranges as the scene validation checks them).
-pub fn material_editor(ui: &mut egui::Ui, m: &mut Material) -> bool {
-    let mut changed = false;
-    let mut c = m.albedo.map(|v| v as f32);
+/// A colour from an egui colour widget (f32) back to the scene's f64, written as the shortest
+/// decimal that the f32 rounds to: 0.2 stays 0.2 instead of becoming 0.19999999...
+pub fn colour_from_f32(c: f32) -> f64 {
+    format!("{c}")
+        .parse::<f64>()
+        .unwrap_or(c as f64)
+        .clamp(0.0, 1.0)
+}
+
+/// The material of a node (ranges as the scene validation checks them). Opening the colour
+/// picker is not an edit: only a component the user changed is written back.
+pub fn material_editor(ui: &mut egui::Ui, m: &mut Material) -> Edit {
+    let mut edit = None;
+    let before = m.albedo.map(|v| v as f32);
+    let mut c = before;
     ui.horizontal(|ui| {
-        if ui.color_edit_button_rgb(&mut c).changed() {
-            m.albedo = c.map(|v| (v as f64).clamp(0.0, 1.0));
-            changed = true;
-        }
+        let r = ui.color_edit_button_rgb(&mut c);
+        crate::script::place("param", "Material.albedo".into(), &r);
         ui.label("albedo");
     });
-    changed |= ui
+    // The picker converts to HSVA and back every frame it is open, which moves a component
+    // by a few ulps: only a change larger than that is the user's.
+    let moved: Vec<usize> = (0..3)
+        .filter(|&i| (c[i] - before[i]).abs() > 1e-5)
+        .collect();
+    if !moved.is_empty() {
+        for i in moved {
+            m.albedo[i] = colour_from_f32(c[i]);
+        }
+        edit = Some("set albedo".into());
+    }
+    if ui
         .add(egui::Slider::new(&mut m.specular, 0.0..=1.0).text("specular"))
-        .changed();
-    changed |= ui
+        .changed()
+    {
+        keep(&mut edit, Some("set specular".into()));
+    }
+    if ui
         .add(
             egui::Slider::new(&mut m.shininess, 1.0..=4096.0)
                 .logarithmic(true)
                 .text("shininess"),
         )
-        .changed();
-    changed |= ui
+        .changed()
+    {
+        keep(&mut edit, Some("set shininess".into()));
+    }
+    if ui
         .add(egui::Slider::new(&mut m.trap_colour, 0.0..=1.0).text("trap colour"))
         .on_hover_text("how much the orbit-trap palette replaces the albedo (fractals)")
-        .changed();
-    changed
+        .changed()
+    {
+        keep(&mut edit, Some("set trap colour".into()));
+    }
+    edit
 }
 
 #[cfg(test)]

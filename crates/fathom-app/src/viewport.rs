@@ -48,6 +48,7 @@ struct InFlight {
     stage: Stage,
     cancel: CancelToken,
     sent: Instant,
+    progress: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 /// The frame on screen.
@@ -63,6 +64,8 @@ pub struct Shown {
     pub ms: f64,
     /// Octree subdivisions still asked for, for stepped octree frames.
     pub octree_requests: Option<u64>,
+    /// The fraction of the viewport's resolution it was rendered at (1: full resolution).
+    pub scale: f64,
 }
 
 /// Frame scheduling and the texture on screen.
@@ -172,6 +175,7 @@ impl Viewport {
                     generation: done.generation,
                     ms: done.ms,
                     octree_requests: done.octree_requests,
+                    scale: done.scale,
                 });
                 Some(image)
             }
@@ -265,10 +269,12 @@ impl Viewport {
             Stage::Full => (w, h, 1, 1.0),
             Stage::Supersampled => (w, h, self.refine_supersample, 1.0),
         };
-        // Stereo: the viewport shows the whole layout; each eye gets its share.
+        // Stereo: the viewport shows the whole layout, each eye with the viewport's own shape
+        // (side by side: half as wide and half as high, so neither eye is cropped or
+        // squeezed; the pair is drawn letterboxed).
         let (fw, fh) = match base.projection {
             fathom_core::Projection::Mono => (fw, fh),
-            fathom_core::Projection::SideBySide { .. } => ((fw / 2).max(1), fh),
+            fathom_core::Projection::SideBySide { .. } => ((fw / 2).max(1), (fh / 2).max(1)),
             fathom_core::Projection::Ods { .. } => (fw, (fh / 2).max(1)),
         };
         let mut request = RenderRequest {
@@ -290,7 +296,9 @@ impl Viewport {
         }
         self.next_id += 1;
         let cancel = CancelToken::new();
+        let progress = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
         worker.render(FrameJob {
+            progress: progress.clone(),
             id: self.next_id,
             stage,
             key,
@@ -306,6 +314,7 @@ impl Viewport {
             stage,
             cancel,
             sent: Instant::now(),
+            progress,
         });
     }
 
@@ -315,6 +324,18 @@ impl Viewport {
         if let Some(f) = self.in_flight.take() {
             self.failed_key = Some(f.key);
         }
+    }
+
+    /// How far the frame being rendered has got, once it has taken longer than a second and
+    /// its renderer reports progress.
+    pub fn progress(&self) -> Option<f64> {
+        let f = self.in_flight.as_ref()?;
+        if f.sent.elapsed().as_secs_f64() < 1.0 {
+            return None;
+        }
+        let v = f.progress.load(std::sync::atomic::Ordering::Relaxed);
+        let (total, done) = (v >> 32, v & 0xffff_ffff);
+        (total > 0).then(|| done as f64 / total as f64)
     }
 
     /// Frames asked of the worker so far.

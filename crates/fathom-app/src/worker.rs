@@ -44,6 +44,9 @@ pub struct FrameJob {
     pub octree_step: bool,
     /// The fraction of the viewport's resolution this frame renders at.
     pub scale: f64,
+    /// How far the render has got: units done (low 32 bits) and their total (high 32 bits),
+    /// written by the renderer as it goes, read by the window for a slow frame's progress.
+    pub progress: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 /// What the worker sends back for a job.
@@ -275,9 +278,15 @@ fn run(
 
 fn render(session: &mut Session, job: &FrameJob, generation: u64) -> FrameDone {
     let start = Instant::now();
+    let report = |p: fathom_render::Progress| {
+        job.progress.store(
+            ((p.total as u64) << 32) | p.done as u64,
+            std::sync::atomic::Ordering::Relaxed,
+        );
+    };
     let control = Control {
         cancel: Some(&job.cancel),
-        progress: None,
+        progress: Some(&report),
     };
     let mut octree_requests = None;
     let result = if job.cancel.is_cancelled() {
@@ -363,6 +372,7 @@ pub(crate) mod tests {
             cancel: CancelToken::new(),
             octree_step: false,
             scale: 1.0,
+            progress: Default::default(),
         }
     }
 
