@@ -21,10 +21,12 @@ have ffmpeg || need+=(ffmpeg)
 for p in slurmctld slurmd slurm-client munge; do
   have "$p" || need+=("$p")
 done
-# The window smoke test (crates/fathom/tests/window_smoke.rs) runs the real explorer window on
-# a virtual X server: xvfb-run starts Xvfb (with an xauth cookie) for the one command and
-# stops it afterwards.
-for p in xvfb xauth; do
+# The window tests run the real explorer window on a virtual X server: the smoke test
+# (crates/fathom/tests/window_smoke.rs) through xvfb-run (Xvfb with an xauth cookie for the one
+# command), the real-input tests (crates/fathom/tests/window_input.rs, crates/fathom-xdrive)
+# on an Xvfb of their own, started and stopped by its PID, with X events from xdotool and
+# screen captures from ImageMagick's `import`.
+for p in xvfb xauth xdotool imagemagick; do
   have "$p" || need+=("$p")
 done
 

@@ -38,6 +38,9 @@ enum BenchKind {
     /// Volume path tracer paths/s on a Menger density (majorant grid vs one global majorant)
     /// and physarum agent-steps/s with 1M agents on 256^3.
     Volume(crate::bench_volume::VolumeBenchArgs),
+    /// The explorer's real window under Xvfb with real X input (needs xvfb and xdotool):
+    /// launch to first picture, fps while dragging, drag latency, per renderer.
+    Window(crate::bench_window::WindowBenchArgs),
 }
 
 pub fn run(a: BenchArgs) -> Result<(), String> {
@@ -52,5 +55,6 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         BenchKind::Svo(s) => crate::bench_svo::run(s),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
         BenchKind::Volume(v) => crate::bench_volume::run(v),
+        BenchKind::Window(w) => crate::bench_window::run(w),
     }
 }

@@ -21,6 +21,7 @@ mod bench_micro;
 mod bench_svo;
 mod bench_trace;
 mod bench_volume;
+mod bench_window;
 mod cmd_explore;
 mod cmd_farm;
 mod cmd_flight;

@@ -4,7 +4,7 @@
 //! frames and that the image is the scene: equal to an offline render of the preset's view
 //! within a stated tolerance. A second test runs `fathom` with no arguments on the display and
 //! checks that it opened the window (still running after a while, no fathom.png) instead of
-//! rendering to a file. Skipped, saying why, only when xvfb-run is missing.
+//! rendering to a file. A missing xvfb-run fails the tests (scripts/setup.sh installs it).
 
 use fathom_core::presets;
 use fathom_render::{RenderRequest, Session};
@@ -20,11 +20,17 @@ const LEVELS: u8 = 8;
 /// One Xvfb at a time (`xvfb-run -a` picks a free display number, racily).
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
-fn have_xvfb_run() -> bool {
-    Command::new("sh")
+/// Fails the test when xvfb-run is missing: a window test that passes without its window
+/// tests nothing.
+fn require_xvfb_run() {
+    let found = Command::new("sh")
         .args(["-c", "command -v xvfb-run"])
         .output()
-        .is_ok_and(|o| o.status.success())
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        found,
+        "xvfb-run is not installed: bash scripts/setup.sh installs xvfb and xauth"
+    );
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -37,13 +43,7 @@ fn scratch(name: &str) -> PathBuf {
 #[test]
 fn the_window_runs_under_xvfb_and_its_screenshot_is_the_scene() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    if !have_xvfb_run() {
-        eprintln!(
-            "SKIPPED the_window_runs_under_xvfb_and_its_screenshot_is_the_scene: xvfb-run is not \
-             installed (bash scripts/setup.sh installs xvfb and xauth)"
-        );
-        return;
-    }
+    require_xvfb_run();
     let dir = scratch("window-smoke");
     let shot = dir.join("shot.png");
     let log = dir.join("frames.jsonl");
@@ -128,13 +128,7 @@ fn the_window_runs_under_xvfb_and_its_screenshot_is_the_scene() {
 #[test]
 fn fathom_without_arguments_opens_the_window_when_a_display_is_present() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    if !have_xvfb_run() {
-        eprintln!(
-            "SKIPPED fathom_without_arguments_opens_the_window_when_a_display_is_present: \
-             xvfb-run is not installed (bash scripts/setup.sh installs xvfb and xauth)"
-        );
-        return;
-    }
+    require_xvfb_run();
     let dir = scratch("no-args-window");
     // `timeout` (coreutils) stops fathom after 10 s, inside xvfb-run, which then stops Xvfb.
     // A window still open then exits 124; had no window opened, fathom would have rendered
@@ -160,13 +154,7 @@ fn fathom_without_arguments_opens_the_window_when_a_display_is_present() {
 #[test]
 fn the_real_window_listens_on_its_osc_port_and_logs_what_arrives() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    if !have_xvfb_run() {
-        eprintln!(
-            "SKIPPED the_real_window_listens_on_its_osc_port_and_logs_what_arrives: xvfb-run is \
-             not installed (bash scripts/setup.sh installs xvfb and xauth)"
-        );
-        return;
-    }
+    require_xvfb_run();
     let dir = scratch("window-osc");
     let mut scene = presets::load("sierpinski").unwrap();
     use fathom_core::binding::{Binding, OscInput, Source};
