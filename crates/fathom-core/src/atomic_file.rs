@@ -74,6 +74,25 @@ pub fn check_output_path(path: &Path) -> Result<(), WriteError> {
     Ok(())
 }
 
+/// Makes sure `dir`, an output directory, exists: creates it when missing, but only it,
+/// never its missing parents (a typo in a parent should fail, not build a tree somewhere).
+pub fn create_output_dir(dir: &Path) -> Result<(), WriteError> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    let parent = match dir.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(WriteError::MissingDirectory {
+            path: dir.into(),
+            dir: parent.into(),
+        });
+    }
+    std::fs::create_dir(dir).map_err(WriteError::io(dir))
+}
+
 /// An output being written under its temporary name; [`AtomicFile::commit`] puts it in
 /// place, dropping it unfinished removes it.
 #[derive(Debug)]
@@ -184,6 +203,14 @@ mod tests {
         assert!(e.to_string().contains("does not exist"), "{e}");
         let e = AtomicFile::create(&dir).unwrap_err();
         assert!(e.to_string().contains("is a directory"), "{e}");
+        // Output directories: the last level is made, missing parents are an error.
+        create_output_dir(&dir.join("frames")).unwrap();
+        assert!(dir.join("frames").is_dir());
+        create_output_dir(&dir.join("frames")).unwrap();
+        let e = create_output_dir(&dir.join("typo/frames")).unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        assert!(!dir.join("typo").exists());
+        std::fs::remove_dir(dir.join("frames")).unwrap();
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -25,6 +25,19 @@ pub enum ReadError {
     TooLarge { path: PathBuf, size: u64, max: u64 },
 }
 
+impl ReadError {
+    /// What is wrong, without the path (for messages that name the file themselves).
+    pub fn reason(&self) -> String {
+        match self {
+            ReadError::Io { source, .. } => source.to_string(),
+            ReadError::NotAFile { kind, .. } => format!("it is a {kind}, not a regular file"),
+            ReadError::TooLarge { size, max, .. } => {
+                format!("it is {size} bytes; the limit is {max} bytes")
+            }
+        }
+    }
+}
+
 /// What kind of non-regular file `m` describes, for messages.
 fn kind(m: &std::fs::Metadata) -> &'static str {
     let t = m.file_type();
