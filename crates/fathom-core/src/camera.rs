@@ -39,7 +39,22 @@ pub enum CameraError {
     Coincide,
     #[error("camera: up is parallel to the view direction (or zero)")]
     UpParallel,
+    /// A coordinate so large that the view direction's length overflows f64.
+    #[error(
+        "camera: {what} = ({x:e}, {y:e}, {z:e}) is too large: coordinates are limited to \
+         {MAX_COORDINATE:e} (the view direction's length would overflow)"
+    )]
+    TooLarge {
+        what: &'static str,
+        x: f64,
+        y: f64,
+        z: f64,
+    },
 }
+
+/// Largest magnitude of a camera coordinate (eye, target, up): the squared length of a
+/// difference of two such points is still finite.
+pub const MAX_COORDINATE: f64 = 1e150;
 
 /// Why a projection cannot be used.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -67,6 +82,16 @@ impl Camera {
         }
         if !(self.fov > 0.0 && self.fov <= 179.0) {
             return Err(CameraError::Fov { fov: self.fov });
+        }
+        for (what, v) in [("eye", self.eye), ("target", self.target), ("up", self.up)] {
+            if v.abs().max_element() > MAX_COORDINATE {
+                return Err(CameraError::TooLarge {
+                    what,
+                    x: v.x,
+                    y: v.y,
+                    z: v.z,
+                });
+            }
         }
         let f = self.target - self.eye;
         if f.length_squared() == 0.0 {
@@ -286,6 +311,21 @@ mod tests {
         // Top of the image looks up, left looks left.
         assert!(f.ray_dir(50.0, 0.0, 100, 100).dot(f.up) > 0.0);
         assert!(f.ray_dir(0.0, 50.0, 100, 100).dot(f.right) < 0.0);
+    }
+
+    #[test]
+    fn huge_coordinates_are_blamed_not_the_up_vector() {
+        let c = Camera {
+            eye: DVec3::new(1e308, 0.0, 0.0),
+            ..Camera::default()
+        };
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("eye = (1e308") && e.contains("1e150"), "{e}");
+        let c = Camera {
+            eye: DVec3::new(1e150, 0.0, 0.0),
+            ..Camera::default()
+        };
+        c.validate().unwrap();
     }
 
     #[test]

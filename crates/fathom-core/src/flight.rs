@@ -530,6 +530,11 @@ impl PartialEq for Segment {
 
 /// The logarithmic mean of two positive numbers: the exact `|dp| / h` integral over a step
 /// along which `h` changes linearly is `|dp| / logmean`.
+/// The largest perceived length one step of a segment's table counts: a key scale of 1e-300
+/// next to keys metres apart makes a step's length overflow, and sums over a path of
+/// infinities have no proportions. Capped, every table and every path total stays finite.
+const MAX_STEP_LENGTH: f64 = 1e250;
+
 fn log_mean(a: f64, b: f64) -> f64 {
     let r = a / b;
     if (r - 1.0).abs() < 1e-9 {
@@ -574,7 +579,13 @@ impl Segment {
                 let dp = (p - p0).length() / log_mean(h0, h);
                 let dr = spline::angle_between(q0, q);
                 let df = lf - lf0;
-                acc += (dp * dp + dr * dr + df * df).sqrt();
+                // hypot: a scale of 1e-200 makes dp 1e200, whose square is infinite.
+                let step = dp.hypot(dr).hypot(df);
+                acc += if step.is_finite() {
+                    step.min(MAX_STEP_LENGTH)
+                } else {
+                    MAX_STEP_LENGTH
+                };
             }
             seg.table.push(acc);
             seg.scale_at.push(h);

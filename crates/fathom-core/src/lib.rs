@@ -10,12 +10,17 @@
 //! - [`eval`]: the CPU interpreter (f64 scalar and f32x8 packet paths) and normals;
 //! - [`dd`]: double-double numbers ([`Dd`], ~1e-32 relative) for zooms past f64 precision;
 //! - [`reference`]: a direct tree walk that defines what the tape must compute;
-//! - [`shared`]: constants the CPU renderers and the WGSL program share, defined once.
+//! - [`shared`]: constants the CPU renderers and the WGSL program share, defined once;
+//! - [`atomic_file`]: every output written under a temporary name and renamed once whole;
+//!   [`cleanup`]: temporary files removed on every exit path, Ctrl-C included;
+//!   [`input_file`]: inputs read only when regular files under a size limit.
 
+pub mod atomic_file;
 pub mod binding;
 pub mod call_serde;
 pub mod camera;
 pub mod camera_path;
+pub mod cleanup;
 pub mod combine;
 pub mod dd;
 pub mod dd4;
@@ -24,6 +29,7 @@ pub mod eval;
 pub mod flight;
 pub mod fractals;
 pub mod frame;
+pub mod input_file;
 pub mod limits;
 pub mod modifiers;
 pub mod param_path;

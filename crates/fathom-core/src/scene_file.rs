@@ -41,6 +41,12 @@ pub enum SceneFileError {
     /// The file is larger than [`limits::MAX_SCENE_FILE_BYTES`]; it was not read.
     #[error("{origin}: the file is {size} bytes; scene files are limited to {max} bytes", max = limits::MAX_SCENE_FILE_BYTES)]
     TooLarge { origin: String, size: u64 },
+    /// The path is not a regular file (a directory, FIFO or device); it was not opened.
+    #[error(transparent)]
+    Read(crate::input_file::ReadError),
+    /// The file could not be written (the old one, if any, is left as it was).
+    #[error(transparent)]
+    Write(#[from] crate::atomic_file::WriteError),
 }
 
 impl SceneFileError {
@@ -228,11 +234,15 @@ fn read_text(path: &Path) -> Result<String, SceneFileError> {
         origin: origin.clone(),
         source,
     };
-    let size = std::fs::metadata(path).map_err(io)?.len();
-    if size > limits::MAX_SCENE_FILE_BYTES {
-        return Err(SceneFileError::TooLarge { origin, size });
-    }
-    let bytes = std::fs::read(path).map_err(io)?;
+    use crate::input_file::{self, ReadError};
+    let bytes = input_file::read(path, limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
+        ReadError::TooLarge { size, .. } => SceneFileError::TooLarge {
+            origin: origin.clone(),
+            size,
+        },
+        ReadError::Io { source, .. } => io(source),
+        e @ ReadError::NotAFile { .. } => SceneFileError::Read(e),
+    })?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let valid = String::from_utf8_lossy(valid);
@@ -257,12 +267,9 @@ pub fn to_string(scene: &Scene) -> String {
         .expect("a scene always serialises")
 }
 
-/// Writes a scene file.
+/// Writes a scene file (atomically: the old file stays until the new one is whole).
 pub fn save(path: &Path, scene: &Scene) -> Result<(), SceneFileError> {
-    std::fs::write(path, to_string(scene)).map_err(|source| SceneFileError::Io {
-        origin: path.display().to_string(),
-        source,
-    })
+    Ok(crate::atomic_file::write(path, to_string(scene))?)
 }
 
 #[cfg(test)]

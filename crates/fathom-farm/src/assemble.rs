@@ -35,6 +35,7 @@ fn image_err(path: &Path, e: impl ToString) -> FarmError {
 
 /// Verifies every unit of `farm`, then stitches a still into `out` (frames are returned).
 pub fn assemble(farm: &FarmDir, out: &Path) -> Result<Assembled, FarmError> {
+    refuse_inside_job(farm, out)?;
     let files = farm.verified()?;
     let m = &farm.manifest;
     if !matches!(m.fingerprint.work, Work::Tiles { .. }) {
@@ -76,4 +77,35 @@ pub fn assemble(farm: &FarmDir, out: &Path) -> Result<Assembled, FarmError> {
         width: w,
         height: h,
     })
+}
+
+/// Refuses an output that would overwrite one of the job's own files (a unit, its receipt,
+/// the manifest or the stored scene): the job directory is the farm's, not an output's.
+pub fn refuse_inside_job(farm: &FarmDir, out: &Path) -> Result<(), FarmError> {
+    let canon = |p: &Path| std::fs::canonicalize(p).ok();
+    let (Some(job), Some(name)) = (canon(&farm.dir), out.file_name()) else {
+        return Ok(());
+    };
+    let parent = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let Some(dir) = canon(parent) else {
+        return Ok(());
+    };
+    if dir.starts_with(&job) {
+        let name = name.to_string_lossy();
+        let owned = farm.manifest.units.iter().any(|u| u.file == name)
+            || dir != job
+            || [crate::manifest::MANIFEST, crate::manifest::SCENE].contains(&name.as_ref());
+        if owned {
+            return Err(FarmError::Work(format!(
+                "{}: the output would overwrite a file of the job in {} (its units, receipts, \
+                 manifest or scene); write it outside the job directory",
+                out.display(),
+                farm.dir.display()
+            )));
+        }
+    }
+    Ok(())
 }

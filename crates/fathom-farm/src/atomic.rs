@@ -4,48 +4,42 @@
 //! when the failure is seen; a killed task's is ignored and overwritten by a rerun).
 
 use crate::error::FarmError;
+use fathom_core::atomic_file::{AtomicFile, WriteError};
+pub use fathom_core::atomic_file::{is_temp_name, temp_path};
 use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::path::Path;
 
-static COUNTER: AtomicU64 = AtomicU64::new(0);
-
-/// The temporary name `path` is written under (hidden, unique per process and call).
-pub fn temp_path(path: &Path) -> PathBuf {
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    path.with_file_name(format!(".{name}.tmp-{}-{n}", std::process::id()))
+/// The farm's error for a failed atomic write.
+fn farm_err(e: WriteError) -> FarmError {
+    match e {
+        WriteError::Io { path, source } => FarmError::Write { path, source },
+        WriteError::MissingDirectory { ref path, .. } | WriteError::NotAFileName { ref path } => {
+            FarmError::Write {
+                path: path.clone(),
+                source: std::io::Error::other(e.to_string()),
+            }
+        }
+    }
 }
 
-/// Whether a file name is one of [`temp_path`]'s.
-pub fn is_temp_name(name: &str) -> bool {
-    name.starts_with('.') && name.contains(".tmp-")
-}
-
-/// Writes `bytes` to `path` through a temporary file, synced, then renamed.
+/// Writes `bytes` to `path` through a temporary file, synced, then renamed
+/// ([`fathom_core::atomic_file`], which also removes the temporary file on Ctrl-C).
 pub fn write(path: &Path, bytes: &[u8]) -> Result<(), FarmError> {
-    write_with(path, |tmp| {
-        let mut f = std::fs::File::create_new(tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()
-    })
+    write_with(path, |f| f.write_all(bytes))
 }
 
-/// [`write`] with the temporary file written by `fill` (which creates it): on an error the
-/// temporary file is removed and nothing appears under `path`.
+/// [`write`] with the temporary file filled by `fill`: on an error the temporary file is
+/// removed and nothing appears under `path`.
 pub fn write_with(
     path: &Path,
-    fill: impl FnOnce(&Path) -> std::io::Result<()>,
+    fill: impl FnOnce(&mut AtomicFile) -> std::io::Result<()>,
 ) -> Result<(), FarmError> {
-    let tmp = temp_path(path);
-    let result = fill(&tmp).and_then(|()| std::fs::rename(&tmp, path));
-    result.map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        FarmError::Write {
-            path: path.into(),
-            source,
-        }
-    })
+    let mut f = AtomicFile::create(path).map_err(farm_err)?;
+    fill(&mut f).map_err(|source| FarmError::Write {
+        path: path.into(),
+        source,
+    })?;
+    f.commit().map_err(farm_err)
 }
 
 /// Writes `bytes` to `path` only if nothing is there: through a temporary file and a hard
@@ -57,17 +51,14 @@ pub fn create_exclusive(path: &Path, bytes: &[u8]) -> Result<bool, FarmError> {
         path: path.into(),
         source,
     };
-    let filled = (|| {
-        let mut f = std::fs::File::create_new(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()
-    })();
-    if let Err(e) = filled {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(werr(e));
-    }
-    let linked = std::fs::hard_link(&tmp, path);
-    let _ = std::fs::remove_file(&tmp);
+    let (tmp, mut f) = fathom_core::cleanup::Pending::create(tmp, |p| std::fs::File::create_new(p))
+        .map_err(werr)?;
+    f.write_all(bytes)
+        .and_then(|()| f.sync_all())
+        .map_err(werr)?;
+    drop(f);
+    let linked = std::fs::hard_link(tmp.path(), path);
+    drop(tmp);
     match linked {
         Ok(()) => Ok(true),
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(false),
@@ -78,14 +69,15 @@ pub fn create_exclusive(path: &Path, bytes: &[u8]) -> Result<bool, FarmError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
 
     /// A writer onto a "disk" that fills up after `room` bytes.
-    struct SmallDisk {
-        file: std::fs::File,
+    struct SmallDisk<'a> {
+        file: &'a mut AtomicFile,
         room: usize,
     }
 
-    impl Write for SmallDisk {
+    impl Write for SmallDisk<'_> {
         fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
             if self.room == 0 {
                 return Err(std::io::Error::new(
@@ -114,9 +106,9 @@ mod tests {
         let dir = scratch("atomic");
         let path = dir.join("tile-00000.png");
         let bytes = vec![7u8; 10_000];
-        let e = write_with(&path, |tmp| {
+        let e = write_with(&path, |f| {
             let mut w = SmallDisk {
-                file: std::fs::File::create_new(tmp)?,
+                file: f,
                 room: 4096,
             };
             w.write_all(&bytes)

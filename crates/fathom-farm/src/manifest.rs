@@ -183,11 +183,46 @@ pub struct FarmDir {
     pub manifest: Manifest,
 }
 
+/// Largest `farm.json` read, in bytes.
+pub const MAX_MANIFEST_BYTES: u64 = 64 << 20;
+/// Largest receipt read, in bytes.
+pub const MAX_RECEIPT_BYTES: u64 = 1 << 20;
+/// Largest unit file (a tile or frame PNG) read, in bytes: a 16384 x 16384 16-bit RGB image
+/// stored uncompressed is 1.5 GiB.
+pub const MAX_UNIT_BYTES: u64 = 2 << 30;
+
+/// Reads `path` if it is a regular file of at most `max` bytes (a FIFO or `/dev/zero` behind
+/// a symlink is refused before reading).
+fn read_capped(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
+    use fathom_core::input_file::{self, ReadError};
+    input_file::read(path, max).map_err(|e| match e {
+        ReadError::Io { source, .. } => source,
+        other => std::io::Error::other(other.reason()),
+    })
+}
+
 fn read(path: &Path) -> Result<Vec<u8>, FarmError> {
-    std::fs::read(path).map_err(|source| FarmError::Read {
+    read_capped(path, MAX_MANIFEST_BYTES).map_err(|source| FarmError::Read {
         path: path.into(),
         source,
     })
+}
+
+/// A manifest parse error, naming the unit entry at fault when it is one of them (serde's
+/// own message gives only a line and column, the same for every entry of a one-line file).
+fn which_entry(bytes: &[u8], e: serde_json::Error) -> String {
+    let Ok(v) = serde_json::from_slice::<serde_json::Value>(bytes) else {
+        return e.to_string();
+    };
+    if let Some(units) = v.get("units").and_then(|u| u.as_array()) {
+        for (i, u) in units.iter().enumerate() {
+            if let Err(ue) = serde_json::from_value::<crate::work::Unit>(u.clone()) {
+                let file = u.get("file").and_then(|f| f.as_str()).unwrap_or("?");
+                return format!("units[{i}] (`{file}`): {ue}");
+            }
+        }
+    }
+    e.to_string()
 }
 
 fn damaged(path: &Path, why: impl ToString) -> FarmError {
@@ -276,7 +311,8 @@ impl FarmDir {
             return Err(FarmError::NotAFarm { dir: dir.into() });
         }
         let bytes = read(&path)?;
-        let manifest: Manifest = serde_json::from_slice(&bytes).map_err(|e| damaged(&path, e))?;
+        let manifest: Manifest =
+            serde_json::from_slice(&bytes).map_err(|e| damaged(&path, which_entry(&bytes, e)))?;
         if manifest.format != FORMAT {
             return Err(damaged(
                 &path,
@@ -302,8 +338,20 @@ impl FarmDir {
             }
             return Err(damaged(&path, "its job id does not match its fingerprint"));
         }
-        if manifest.units != manifest.fingerprint.work.units(manifest.output) {
-            return Err(damaged(&path, "its units do not match its work"));
+        let want = manifest.fingerprint.work.units(manifest.output);
+        if manifest.units != want {
+            let why = match manifest.units.iter().zip(&want).position(|(a, b)| a != b) {
+                Some(i) => format!(
+                    "unit {i} (`{}`) is not the unit its work defines there (`{}`)",
+                    manifest.units[i].file, want[i].file
+                ),
+                None => format!(
+                    "it lists {} units; its work has {}",
+                    manifest.units.len(),
+                    want.len()
+                ),
+            };
+            return Err(damaged(&path, why));
         }
         Ok(FarmDir {
             dir: dir.into(),
@@ -334,12 +382,12 @@ impl FarmDir {
     pub fn check(&self, unit: &Unit) -> UnitState {
         let file = self.path(unit);
         let rpath = self.receipt_path(unit);
-        let bytes = match std::fs::read(&file) {
+        let bytes = match read_capped(&file, MAX_UNIT_BYTES) {
             Ok(b) => Some(b),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
             Err(e) => return UnitState::Corrupt(format!("cannot read: {e}")),
         };
-        let receipt = match std::fs::read(&rpath) {
+        let receipt = match read_capped(&rpath, MAX_RECEIPT_BYTES) {
             Ok(r) => match serde_json::from_slice::<Receipt>(&r) {
                 Ok(r) => Some(r),
                 Err(e) => return UnitState::Corrupt(format!("damaged receipt: {e}")),

@@ -467,3 +467,56 @@ fn of_two_jobs_racing_into_a_new_directory_exactly_one_wins_and_it_is_whole() {
         std::fs::remove_dir_all(&dir).ok();
     }
 }
+
+#[test]
+fn assembly_refuses_an_output_among_the_jobs_own_files() {
+    let dir = scratch("assemble-inside");
+    let farm = fake_job(&dir, "scene A", 4).unwrap();
+    let unit = farm.path(&farm.manifest.units[0]);
+    for out in [
+        unit.clone(),
+        dir.join(crate::manifest::MANIFEST),
+        dir.join("receipts/x.png"),
+    ] {
+        let e = crate::assemble::assemble(&farm, &out)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("would overwrite a file of the job"), "{e}");
+    }
+    assert!(!unit.exists(), "nothing was written");
+    // Beside the job is fine as far as this check goes (the units are not done, so it
+    // fails for that reason instead).
+    let e = crate::assemble::assemble(&farm, &dir.with_extension("png"))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(!e.contains("would overwrite"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_damaged_manifest_entry_names_its_unit() {
+    let dir = scratch("damaged-entry");
+    fake_job(&dir, "scene A", 4).unwrap();
+    let path = dir.join(crate::manifest::MANIFEST);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["units"][2]["index"] = serde_json::json!("two");
+    std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+    let e = FarmDir::open(&dir).err().unwrap().to_string();
+    assert!(e.contains("units[2]") && e.contains("tile-"), "{e}");
+    v["units"][2]["index"] = serde_json::json!(3);
+    std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+    let e = FarmDir::open(&dir).err().unwrap().to_string();
+    assert!(e.contains("unit 2 ("), "{e}");
+    // A manifest that is a device behind a symlink is refused, not read forever.
+    #[cfg(unix)]
+    {
+        std::fs::remove_file(&path).unwrap();
+        std::os::unix::fs::symlink("/dev/zero", &path).unwrap();
+        let e = FarmDir::open(&dir).err().unwrap().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

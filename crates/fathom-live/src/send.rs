@@ -4,10 +4,24 @@ use crate::error::LiveError;
 use rosc::{OscMessage, OscPacket, OscType};
 use std::net::{SocketAddr, UdpSocket};
 
-/// Encodes one message of float arguments (`f32`, as most OSC senders send).
+/// Encodes one message of float arguments (`f32`, as most OSC senders send). `nan` and
+/// `inf` are sent as they are (to test a listener's rejection); a finite value too large for
+/// an `f32` is refused rather than silently sent as infinity.
 pub fn encode(address: &str, values: &[f64]) -> Result<Vec<u8>, LiveError> {
     rosc::address::verify_address(address)
         .map_err(|e| LiveError::Encode(format!("`{address}` is not an OSC address: {e}")))?;
+    if let Some((i, v)) = values
+        .iter()
+        .enumerate()
+        .find(|(_, v)| v.is_finite() && (**v as f32).is_infinite())
+    {
+        return Err(LiveError::Encode(format!(
+            "value {} = {v:e} does not fit a 32-bit float (largest magnitude {:e}); send `inf` \
+             to send an infinity",
+            i + 1,
+            f32::MAX
+        )));
+    }
     let msg = OscMessage {
         addr: address.into(),
         args: values.iter().map(|&v| OscType::Float(v as f32)).collect(),

@@ -99,6 +99,9 @@ pub enum MeshError {
     Format { path: String, msg: String },
     #[error("invalid scene: {0}")]
     Scene(String),
+    /// The output could not be created or put in place (an existing file is unchanged).
+    #[error(transparent)]
+    Write(#[from] fathom_core::atomic_file::WriteError),
 }
 
 /// Receives a mesh as it is made: vertices in id order, then triangles that use them.

@@ -66,6 +66,15 @@ pub enum MicroError {
         value: String,
         range: &'static str,
     },
+    /// The shell height is outside its range, which is relative to the mesh's size.
+    #[error(
+        "shell height = {height} is out of range ({lo:e}, {hi}] for this mesh: from 1e-6 to \
+         {rel} times its bounding-box diagonal ({diag})",
+        lo = 1e-6 * diag,
+        hi = crate::limits::MAX_SHELL_RELATIVE * diag,
+        rel = crate::limits::MAX_SHELL_RELATIVE
+    )]
+    ShellHeight { height: f64, diag: f64 },
     /// The texture scene does not compile or its keyframes do not match.
     #[error("texture {origin}: {msg}")]
     Texture { origin: String, msg: String },

@@ -10,7 +10,7 @@
 //! Tetrahedra that the offset turns inside out (the shell folds where it is thicker than the
 //! surface's concave radius) or flattens are skipped and counted.
 
-use crate::error::{MicroError, check_range};
+use crate::error::MicroError;
 use crate::limits;
 use crate::mesh::Mesh;
 use crate::tet::{NONE, Tet, jacobian, spectral_norm};
@@ -63,13 +63,10 @@ impl Shell {
     pub fn build(mesh: &Mesh, height: f64, tiling: &Tiling) -> Result<Shell, MicroError> {
         let (lo, hi) = mesh.bounds();
         let diag = (hi - lo).length();
-        check_range(
-            "shell height",
-            height / diag.max(1e-300),
-            1e-6,
-            limits::MAX_SHELL_RELATIVE,
-            "(1e-6, 0.5] times the mesh's bounding-box diagonal",
-        )?;
+        let rel = height / diag.max(1e-300);
+        if !(rel.is_finite() && rel > 1e-6 && rel <= limits::MAX_SHELL_RELATIVE) {
+            return Err(MicroError::ShellHeight { height, diag });
+        }
         tiling.validate()?;
         let scale = tiling.cell.size();
         let mut tets = Vec::with_capacity(3 * mesh.triangles.len());

@@ -2,25 +2,28 @@
 //! (EXR), the layered EXR for compositing (colour, depth, normal, object id, mask), the heat map
 //! of steps per pixel; numbered names for image sequences; and a camera path as a glTF
 //! animation, so other tools can match a render.
+//!
+//! Every file goes through [`fathom_core::atomic_file`]: [`open_output`] creates its
+//! temporary file before the work (so a bad path fails first), each `save_*` fills it and
+//! renames it over the final name only once whole. A failed or interrupted render leaves the
+//! previous file as it was.
 
 use crate::post;
+use fathom_core::atomic_file::{AtomicFile, WriteError};
 use fathom_core::frame::Frame;
-use std::fs::File;
-use std::io::BufWriter;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Why an output file could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    /// The file could not be created (missing directory, no permission, ...).
-    #[error("cannot write {}: {source}", path.display())]
-    Create {
-        path: PathBuf,
-        source: std::io::Error,
-    },
     /// Encoding or writing the image failed (disk full, ...).
     #[error("cannot write {}: {message}", path.display())]
     Write { path: PathBuf, message: String },
+    /// The temporary file could not be created, or not renamed into place (the old file,
+    /// if any, is unchanged).
+    #[error(transparent)]
+    Atomic(#[from] WriteError),
 }
 
 fn write_error(path: &Path, e: impl std::fmt::Display) -> OutputError {
@@ -30,28 +33,46 @@ fn write_error(path: &Path, e: impl std::fmt::Display) -> OutputError {
     }
 }
 
-/// Opens `path` for writing now, so an unwritable path fails before any rendering.
-pub fn open_output(path: &Path) -> Result<File, OutputError> {
-    File::create(path).map_err(|source| OutputError::Create {
-        path: path.into(),
-        source,
-    })
+/// Creates the temporary file that will become `path`, so an unwritable path (or a missing
+/// directory) fails before any rendering; the `save_*` functions fill and commit it.
+pub fn open_output(path: &Path) -> Result<AtomicFile, OutputError> {
+    Ok(AtomicFile::create(path)?)
 }
 
-fn write_png(file: File, path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), OutputError> {
+/// Flushes `w` and commits the file under it.
+fn finish(w: BufWriter<AtomicFile>, path: &Path) -> Result<(), OutputError> {
+    let file = w.into_inner().map_err(|e| write_error(path, e.error()))?;
+    Ok(file.commit()?)
+}
+
+/// Writes `value` as pretty JSON to a file opened by [`open_output`].
+pub fn save_json(
+    value: &impl serde::Serialize,
+    file: AtomicFile,
+    path: &Path,
+) -> Result<(), OutputError> {
+    let mut w = BufWriter::new(file);
+    serde_json::to_writer_pretty(&mut w, value).map_err(|e| write_error(path, e))?;
+    w.write_all(b"\n").map_err(|e| write_error(path, e))?;
+    finish(w, path)
+}
+
+fn write_png(file: AtomicFile, path: &Path, w: u32, h: u32, rgb: &[u8]) -> Result<(), OutputError> {
     use image::ImageEncoder;
-    let enc = image::codecs::png::PngEncoder::new(BufWriter::new(file));
-    enc.write_image(rgb, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| write_error(path, e))
+    let mut out = BufWriter::new(file);
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(rgb, w, h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| write_error(path, e))?;
+    finish(out, path)
 }
 
 /// The tonemapped, gamma-encoded colour image as PNG.
-pub fn save_colour(frame: &Frame, file: File, path: &Path) -> Result<(), OutputError> {
+pub fn save_colour(frame: &Frame, file: AtomicFile, path: &Path) -> Result<(), OutputError> {
     write_png(file, path, frame.width, frame.height, &post::to_rgb8(frame))
 }
 
 /// White where the primary ray hit, black elsewhere (PNG).
-pub fn save_mask(frame: &Frame, file: File, path: &Path) -> Result<(), OutputError> {
+pub fn save_mask(frame: &Frame, file: AtomicFile, path: &Path) -> Result<(), OutputError> {
     let rgb: Vec<u8> = (0..frame.len())
         .flat_map(|i| [if frame.is_hit(i) { 255 } else { 0 }; 3])
         .collect();
@@ -60,7 +81,7 @@ pub fn save_mask(frame: &Frame, file: File, path: &Path) -> Result<(), OutputErr
 
 /// Heat map of distance evaluations per pixel (black, red, yellow, white up to the frame's
 /// maximum), PNG.
-pub fn save_steps(frame: &Frame, file: File, path: &Path) -> Result<(), OutputError> {
+pub fn save_steps(frame: &Frame, file: AtomicFile, path: &Path) -> Result<(), OutputError> {
     let max = frame.steps.iter().copied().max().unwrap_or(0).max(1) as f32;
     let rgb: Vec<u8> = frame
         .steps
@@ -77,7 +98,12 @@ pub fn save_steps(frame: &Frame, file: File, path: &Path) -> Result<(), OutputEr
 /// the coverage (1 where the ray hit, 0 where it missed). Misses carry `far` (the scene's
 /// maximum distance) in RGB so no infinity reaches the file, and alpha 0 tells a compositor
 /// they are background, not a surface at `far`.
-pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<(), OutputError> {
+pub fn save_depth(
+    frame: &Frame,
+    far: f32,
+    file: AtomicFile,
+    path: &Path,
+) -> Result<(), OutputError> {
     let data: Vec<f32> = (0..frame.len())
         .flat_map(|i| {
             let d = frame.depth[i];
@@ -93,13 +119,14 @@ pub fn save_depth(frame: &Frame, far: f32, file: File, path: &Path) -> Result<()
     let mut w = BufWriter::new(file);
     image::DynamicImage::ImageRgba32F(img)
         .write_to(&mut w, image::ImageFormat::OpenExr)
-        .map_err(|e| write_error(path, e))
+        .map_err(|e| write_error(path, e))?;
+    finish(w, path)
 }
 
 /// The tonemapped, gamma-encoded colour image as a 16-bit PNG (the same curve as the 8-bit
 /// one, without its banding in dark gradients). The encoder takes 16-bit samples in native byte
 /// order and writes them big-endian as PNG requires.
-pub fn save_colour16(frame: &Frame, file: File, path: &Path) -> Result<(), OutputError> {
+pub fn save_colour16(frame: &Frame, file: AtomicFile, path: &Path) -> Result<(), OutputError> {
     use image::ImageEncoder;
     let data: Vec<u8> = frame
         .colour
@@ -107,14 +134,16 @@ pub fn save_colour16(frame: &Frame, file: File, path: &Path) -> Result<(), Outpu
         .flat_map(|c| c.map(|v| (post::srgb(post::tonemap(v)) * 65535.0 + 0.5) as u16))
         .flat_map(u16::to_ne_bytes)
         .collect();
-    let enc = image::codecs::png::PngEncoder::new(BufWriter::new(file));
-    enc.write_image(
-        &data,
-        frame.width,
-        frame.height,
-        image::ExtendedColorType::Rgb16,
-    )
-    .map_err(|e| write_error(path, e))
+    let mut out = BufWriter::new(file);
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(
+            &data,
+            frame.width,
+            frame.height,
+            image::ExtendedColorType::Rgb16,
+        )
+        .map_err(|e| write_error(path, e))?;
+    finish(out, path)
 }
 
 /// The channels of the layered EXR, in the OpenEXR layer naming convention: `R G B` linear
@@ -130,7 +159,12 @@ pub fn save_layers(frame: &Frame, far: f32, path: &Path) -> Result<(), OutputErr
 }
 
 /// [`save_layers`] into a file already opened (by [`open_output`]) at `path`.
-pub fn save_layers_to(frame: &Frame, far: f32, file: File, path: &Path) -> Result<(), OutputError> {
+pub fn save_layers_to(
+    frame: &Frame,
+    far: f32,
+    file: AtomicFile,
+    path: &Path,
+) -> Result<(), OutputError> {
     use exr::prelude::*;
     let n = frame.len();
     let hit = |i: usize| frame.is_hit(i);
@@ -153,10 +187,12 @@ pub fn save_layers_to(frame: &Frame, far: f32, file: File, path: &Path) -> Resul
         Encoding::FAST_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
+    let mut out = BufWriter::new(file);
     Image::from_layer(layer)
         .write()
-        .to_buffered(BufWriter::new(file))
-        .map_err(|e| write_error(path, e))
+        .to_buffered(&mut out)
+        .map_err(|e| write_error(path, e))?;
+    finish(out, path)
 }
 
 /// How the main image of a render is encoded, chosen by the output's extension and the
@@ -218,7 +254,7 @@ pub fn save_image(
     frame: &Frame,
     kind: ImageKind,
     far: f32,
-    file: File,
+    file: AtomicFile,
     path: &Path,
 ) -> Result<(), OutputError> {
     match kind {
@@ -452,7 +488,7 @@ pub fn save_camera_path(
     out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
     out.extend_from_slice(b"BIN\0");
     out.extend_from_slice(&bin);
-    std::fs::write(path, out).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    fathom_core::atomic_file::write(path, out).map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

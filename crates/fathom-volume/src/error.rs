@@ -50,6 +50,9 @@ pub enum VolumeError {
         value: String,
         range: String,
     },
+    /// An output could not be written (the old file, if any, is unchanged).
+    #[error(transparent)]
+    Write(#[from] fathom_core::atomic_file::WriteError),
     /// Something else about the input makes it unusable (empty scene, unknown name).
     #[error("{0}")]
     Invalid(String),

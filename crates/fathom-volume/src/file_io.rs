@@ -3,6 +3,7 @@
 //! arrays in both directions.
 
 use crate::error::VolumeError;
+use fathom_core::atomic_file::AtomicFile;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
@@ -33,8 +34,12 @@ pub fn read_checked(
     header_len: usize,
     parse_header: impl FnOnce(&[u8], u64) -> Result<u64, VolumeError>,
 ) -> Result<Vec<u8>, VolumeError> {
-    let mut f = std::fs::File::open(path).map_err(io_err(path))?;
-    let len = f.metadata().map_err(io_err(path))?.len();
+    // Only a regular file: a FIFO would block the open, a device never ends. Its size is
+    // checked against the header (and the memory limit) before the body is read.
+    let (mut f, len) = fathom_core::input_file::open(path, u64::MAX).map_err(|e| match e {
+        fathom_core::input_file::ReadError::Io { source, .. } => io_err(path)(source),
+        other => VolumeError::Invalid(other.to_string()),
+    })?;
     let mut header = vec![0u8; header_len.min(len as usize)];
     f.read_exact(&mut header).map_err(io_err(path))?;
     let total = parse_header(&header, len)?;
@@ -124,19 +129,21 @@ pub fn words<T>(bytes: &[u8], from: fn([u8; 4]) -> T) -> Vec<T> {
         .collect()
 }
 
-/// Writes `header` then the voxels as little-endian 4-byte words.
+/// Writes `header` then the voxels as little-endian 4-byte words, atomically (the old file
+/// stays until the new one is whole).
 pub fn write_file<T: Copy>(
     path: &Path,
     header: &[u8],
     data: &[T],
     to: fn(T) -> [u8; 4],
 ) -> Result<(), VolumeError> {
-    let f = std::fs::File::create(path).map_err(io_err(path))?;
+    let f = AtomicFile::create(path)?;
     let mut w = std::io::BufWriter::new(f);
     w.write_all(header).map_err(io_err(path))?;
     for chunk in data.chunks(1 << 16) {
         let bytes: Vec<u8> = chunk.iter().flat_map(|&v| to(v)).collect();
         w.write_all(&bytes).map_err(io_err(path))?;
     }
-    w.flush().map_err(io_err(path))
+    let f = w.into_inner().map_err(|e| io_err(path)(e.into_error()))?;
+    Ok(f.commit()?)
 }

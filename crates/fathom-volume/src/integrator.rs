@@ -29,6 +29,11 @@ pub struct VolumeScene {
 /// Largest `max_depth` accepted.
 pub const MAX_DEPTH: u32 = 100_000;
 
+/// `x,y,z` as the command line writes a vector.
+fn rgb(v: Vec3) -> String {
+    format!("{},{},{}", v.x, v.y, v.z)
+}
+
 impl VolumeScene {
     /// Checks the path-length controls and the lights.
     pub fn validate(&self) -> Result<(), VolumeError> {
@@ -55,7 +60,12 @@ impl VolumeScene {
         if !env_ok {
             return Err(VolumeError::param(
                 "environment",
-                format!("{:?}", self.environment),
+                match self.environment {
+                    Environment::Constant(c) => format!("constant {}", rgb(c)),
+                    Environment::Sky { top, bottom, up } => {
+                        format!("sky top {} bottom {} up {}", rgb(top), rgb(bottom), rgb(up))
+                    }
+                },
                 "radiances in [0, 1e6] per channel",
             ));
         }
@@ -64,7 +74,7 @@ impl VolumeScene {
         {
             return Err(VolumeError::param(
                 "sun",
-                format!("{s:?}"),
+                format!("towards {} radiance {}", rgb(s.towards), rgb(s.radiance)),
                 "a unit direction and radiance in [0, 1e6] per channel",
             ));
         }

@@ -62,6 +62,10 @@ impl Default for MediumParams {
 
 /// Largest density scale accepted.
 pub const MAX_DENSITY_SCALE: f64 = 1e6;
+/// Largest extinction (density times density scale, per unit length) a medium may reach:
+/// beyond it f32 overflows to infinity (1e38 x 20) or delta tracking takes more null
+/// collisions than a render can finish, so such a medium is refused with this limit.
+pub const MAX_EXTINCTION: f64 = 1e12;
 /// Largest emission strength accepted.
 pub const MAX_EMISSION: f64 = 1e6;
 /// Largest majorant block, in voxels.
@@ -145,6 +149,17 @@ impl Medium {
     /// Builds the medium and its majorant grid; the density grid must be valid (finite, >= 0).
     pub fn new(density: DensityGrid, p: &MediumParams) -> Result<Self, VolumeError> {
         p.validate()?;
+        let peak = density.max_value() as f64 * p.density_scale as f64;
+        if peak.is_nan() || peak > MAX_EXTINCTION {
+            return Err(VolumeError::Invalid(format!(
+                "the densest voxel ({}) times the density scale ({}) is an extinction of {peak:e} \
+                 per unit length, more than the {MAX_EXTINCTION:e} a render can finish; lower \
+                 --density-scale to at most {:e} or rescale the grid",
+                density.max_value(),
+                p.density_scale,
+                MAX_EXTINCTION / density.max_value() as f64
+            )));
+        }
         let res = density.res();
         let majorant = match p.majorant {
             Majorant::Global => MajorantGrid::global(&density, p.density_scale),

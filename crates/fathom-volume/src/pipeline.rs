@@ -11,6 +11,7 @@ use crate::grid::{DensityGrid, TrailGrid, WorldBox};
 use crate::physarum::{self, Params, Simulation, StepTimes};
 use crate::raw_file::{self, RawGrid};
 use crate::vol_file;
+use fathom_core::atomic_file::AtomicFile;
 use fathom_core::camera::Camera;
 use fathom_core::frame::Frame;
 use fathom_core::scene::Scene;
@@ -288,15 +289,17 @@ pub fn export(path: &Path, built: &Built) -> Result<(), VolumeError> {
     }
 }
 
-/// Writes the frame's colour as a linear float RGB OpenEXR file.
+/// Writes the frame's colour as a linear float RGB OpenEXR file (atomically).
 pub fn save_exr(frame: &Frame, path: &Path) -> Result<(), VolumeError> {
     let data: Vec<f32> = frame.colour.iter().flatten().copied().collect();
     let img = image::Rgb32FImage::from_raw(frame.width, frame.height, data)
         .ok_or_else(|| VolumeError::Invalid("frame buffer has the wrong size".into()))?;
-    let f = std::fs::File::create(path).map_err(io_err(path))?;
+    let mut w = std::io::BufWriter::new(AtomicFile::create(path)?);
     image::DynamicImage::ImageRgb32F(img)
-        .write_to(&mut std::io::BufWriter::new(f), image::ImageFormat::OpenExr)
-        .map_err(|e| VolumeError::Invalid(format!("{}: {e}", path.display())))
+        .write_to(&mut w, image::ImageFormat::OpenExr)
+        .map_err(|e| VolumeError::Invalid(format!("{}: {e}", path.display())))?;
+    let f = w.into_inner().map_err(|e| io_err(path)(e.into_error()))?;
+    Ok(f.commit()?)
 }
 
 #[cfg(test)]

@@ -46,9 +46,28 @@ pub fn parse_bytes(s: &str) -> Result<usize, String> {
         .parse()
         .map_err(|_| format!("memory `{s}` must be a number with an optional K, M or G suffix"))?;
     if !(v.is_finite() && v > 0.0) || v * mul as f64 > 1e15 {
-        return Err(format!("memory `{s}` is out of range"));
+        return Err(format!(
+            "memory `{s}` is out of range (0, 1e15] bytes (e.g. 512M, 4G)"
+        ));
     }
     Ok((v * mul as f64) as usize)
+}
+
+/// Most worker threads a command accepts.
+pub const MAX_THREADS: usize = 1024;
+
+/// The worker pool for `--threads` (default: all cores), refusing counts outside
+/// [1, MAX_THREADS] with the range.
+pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
+    if let Some(t) = threads
+        && !(1..=MAX_THREADS).contains(&t)
+    {
+        return Err(format!("--threads {t} is out of range [1, {MAX_THREADS}]"));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| e.to_string())
 }
 
 #[cfg(test)]
@@ -68,5 +87,11 @@ mod tests {
         assert_eq!(parse_bytes("512M").unwrap(), 512 << 20);
         assert!(parse_bytes("lots").is_err());
         assert!(parse_bytes("-1").is_err());
+        assert!(parse_bytes("0").unwrap_err().contains("(0, 1e15]"));
+        for t in [0, 1025, 100_000] {
+            let e = thread_pool(Some(t)).err().unwrap();
+            assert!(e.contains("[1, 1024]"), "{e}");
+        }
+        assert_eq!(thread_pool(Some(2)).unwrap().current_num_threads(), 2);
     }
 }

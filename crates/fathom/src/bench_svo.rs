@@ -565,9 +565,9 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
 
 /// Writes report.md and results.json to `out` and prints the report.
 fn write_report(out: &FsPath, md: &str, res: &Results) -> Result<(), String> {
-    std::fs::write(out.join("report.md"), md).map_err(|e| e.to_string())?;
-    std::fs::write(
-        out.join("results.json"),
+    fathom_core::atomic_file::write(&out.join("report.md"), md).map_err(|e| e.to_string())?;
+    fathom_core::atomic_file::write(
+        &out.join("results.json"),
         serde_json::to_string_pretty(res).map_err(|e| e.to_string())?,
     )
     .map_err(|e| e.to_string())?;

@@ -312,8 +312,10 @@ fn slurm(s: SlurmArgs) -> Result<(), String> {
     }
     let farm = create_render_job(&s.render)?;
     let units = farm.manifest.units.len();
+    let tasks = s.tasks.unwrap_or(units.min(8));
+    check_tasks(tasks, units)?;
     let o = SlurmOptions {
-        tasks: s.tasks.unwrap_or(units.min(8)),
+        tasks,
         cpus_per_task: s.cpus_per_task,
         partition: s.partition.clone(),
         time: s.time.clone(),
@@ -363,6 +365,18 @@ fn slurm(s: SlurmArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// A job of `units` units runs in 1..=units tasks: a task with no unit would only start a
+/// process and write a log (100000 tasks for 4 units never ended).
+fn check_tasks(tasks: usize, units: usize) -> Result<(), String> {
+    if tasks == 0 || tasks > units {
+        return Err(format!(
+            "--tasks {tasks} is out of range [1, {units}] (the job's units; every task renders \
+             at least one)"
+        ));
+    }
+    Ok(())
+}
+
 fn work(w: WorkArgs) -> Result<(), String> {
     let shard = shard_of(w.shard.as_deref())?;
     let farm = FarmDir::open(&w.dir).map_err(|e| e.to_string())?;
@@ -372,6 +386,14 @@ fn work(w: WorkArgs) -> Result<(), String> {
 fn local(r: RunArgs) -> Result<(), String> {
     let farm = FarmDir::open(&r.dir).map_err(|e| e.to_string())?;
     let exe = std::env::current_exe().map_err(|e| format!("cannot find this fathom: {e}"))?;
+    check_tasks(r.tasks, farm.manifest.units.len())?;
+    if !(1..=crate::args::MAX_THREADS).contains(&r.threads) {
+        return Err(format!(
+            "--threads {} is out of range [1, {}]",
+            r.threads,
+            crate::args::MAX_THREADS
+        ));
+    }
     let parallel = r
         .parallel
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get()));

@@ -65,8 +65,15 @@ pub fn ffmpeg_available() -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-/// Encodes the frames named by `pattern` into an H.264 MP4 at `fps`.
+/// Encodes the frames named by `pattern` into an H.264 MP4 at `fps`. ffmpeg writes a
+/// temporary name beside `video` (removed on failure or interruption) that is renamed over
+/// `video` once complete, as every output is.
 pub fn encode_video(pattern: &Path, fps: f64, video: &Path) -> Result<(), String> {
+    fathom_core::atomic_file::check_output_path(video).map_err(|e| e.to_string())?;
+    let tmp = fathom_core::atomic_file::temp_path(video);
+    // Registered before ffmpeg creates it, so Ctrl-C removes it too.
+    let (tmp, ()) = fathom_core::cleanup::Pending::create(tmp, |_| Ok(()))
+        .map_err(|e| format!("cannot write {}: {e}", video.display()))?;
     let out = Command::new("ffmpeg")
         .args(["-y", "-loglevel", "error", "-framerate"])
         .arg(format!("{fps}"))
@@ -80,8 +87,10 @@ pub fn encode_video(pattern: &Path, fps: f64, video: &Path) -> Result<(), String
             "libx264",
             "-pix_fmt",
             "yuv420p",
+            "-f",
+            "mp4",
         ])
-        .arg(video)
+        .arg(tmp.path())
         .output()
         .map_err(|e| format!("cannot run ffmpeg: {e}"))?;
     if !out.status.success() {
@@ -91,7 +100,8 @@ pub fn encode_video(pattern: &Path, fps: f64, video: &Path) -> Result<(), String
             String::from_utf8_lossy(&out.stderr).trim()
         ));
     }
-    Ok(())
+    tmp.rename_to(video)
+        .map_err(|(_, e)| format!("cannot write {}: {e}", video.display()))
 }
 
 /// Renders the path named by `a.path` of the scene `a` names.

@@ -47,7 +47,7 @@ pub fn run(a: ImportArgs) -> Result<(), String> {
     text += &scene_file::to_string(&imported.scene);
     text.push('\n');
     match &a.output {
-        Some(p) => std::fs::write(p, text).map_err(|e| format!("{}: {e}", p.display())),
+        Some(p) => fathom_core::atomic_file::write(p, text).map_err(|e| e.to_string()),
         None => {
             print!("{text}");
             Ok(())

@@ -122,18 +122,12 @@ impl MeshArgs {
 }
 
 pub fn run(a: MeshArgs) -> Result<(), String> {
-    if a.threads == Some(0) || a.threads.is_some_and(|t| t > 1024) {
-        return Err("--threads must be in [1, 1024]".into());
-    }
     let scene = match (&a.scene, &a.preset) {
         (Some(path), _) => scene_file::load(path).map_err(|e| e.to_string())?,
         (None, Some(p)) => presets::load(p).map_err(|e| e.to_string())?,
         (None, None) => return Err("give a scene FILE or --preset NAME (see --help)".into()),
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| e.to_string())?;
+    let pool = crate::args::thread_pool(a.threads)?;
     match &a.path {
         Some(name) => run_sequence(&a, &scene, name, &pool),
         None => mesh_one(&a, &scene, &a.output, &pool),
@@ -198,16 +192,12 @@ fn mesh_one(
 ) -> Result<(), String> {
     let tape = Tape::compile(scene).map_err(|e| e.to_string())?;
     let o = a.options();
-    // The output is created first, so an unwritable path fails before any work.
+    // The output's temporary file is created first, so an unwritable path fails before any
+    // work; a refused plan drops it, leaving an existing output as it was.
     let mut sink = write::create(out).map_err(|e| e.to_string())?;
-    let plan = match pool.install(|| fathom_mesh::plan(scene, &tape, &o)) {
-        Ok(p) => p,
-        Err(e) => {
-            drop(sink);
-            let _ = std::fs::remove_file(out);
-            return Err(e.to_string());
-        }
-    };
+    let plan = pool
+        .install(|| fathom_mesh::plan(scene, &tape, &o))
+        .map_err(|e| e.to_string())?;
     let g = plan.grid;
     if !a.quiet {
         eprintln!(

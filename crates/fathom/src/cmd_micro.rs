@@ -96,7 +96,7 @@ pub struct MicroArgs {
     /// Vertical field of view in degrees.
     #[arg(long)]
     pub fov: Option<f64>,
-    /// Worker threads (default: all cores).
+    /// Worker threads, [1, 1024] (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Render on the GPU (wgpu): rasterised tetrahedra, marched in the fragment shader.
@@ -157,7 +157,9 @@ fn stats_json(s: &MicroStats, extra: serde_json::Value) -> serde_json::Value {
     })
 }
 
-fn open(p: &Option<PathBuf>) -> Result<Option<(std::fs::File, &Path)>, String> {
+fn open(
+    p: &Option<PathBuf>,
+) -> Result<Option<(fathom_core::atomic_file::AtomicFile, &Path)>, String> {
     p.as_deref()
         .map(|p| {
             output::open_output(p)
@@ -171,11 +173,7 @@ pub fn run(a: MicroArgs) -> Result<(), String> {
     // Unwritable outputs fail before any work.
     let out = output::open_output(&a.output).map_err(|e| e.to_string())?;
     let (mask, steps, stats_file) = (open(&a.mask)?, open(&a.steps)?, open(&a.stats)?);
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = a.threads {
-        builder = builder.num_threads(t);
-    }
-    let pool = builder.build().map_err(|e| e.to_string())?;
+    let pool = crate::args::thread_pool(a.threads)?;
     let bar = if a.quiet {
         indicatif::ProgressBar::hidden()
     } else {
@@ -267,8 +265,7 @@ pub fn run(a: MicroArgs) -> Result<(), String> {
     }
     if let Some((f, p)) = stats_file {
         let j = stats_json(&stats, extra);
-        serde_json::to_writer_pretty(std::io::BufWriter::new(f), &j)
-            .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+        output::save_json(&j, f, p).map_err(|e| e.to_string())?;
     }
     if !a.quiet {
         eprintln!(

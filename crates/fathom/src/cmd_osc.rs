@@ -16,22 +16,40 @@ use std::time::{Duration, Instant};
 ///   fathom osc-send /fathom/light 0.2 --repeat 100 --interval-ms 50
 ///   fathom osc-send /fathom/light nan        (a listener counts it as rejected)
 #[derive(Args, Debug)]
-#[command(verbatim_doc_comment)]
+#[command(verbatim_doc_comment, allow_negative_numbers = true)]
 pub struct OscSendArgs {
     /// OSC address, e.g. /fathom/light.
     pub address: String,
-    /// Argument values (sent as 32-bit floats; `nan` and `inf` are sent as they are).
-    #[arg(allow_hyphen_values = true)]
+    /// Argument values (sent as 32-bit floats; `nan` and `inf` are sent as they are, finite
+    /// values beyond the 32-bit range are refused). Options may follow them.
     pub values: Vec<f64>,
-    /// Where to send: HOST:PORT.
+    /// Where to send: HOST:PORT (a name such as localhost is resolved, IPv4 first).
     #[arg(long, default_value = DEFAULT_OSC_BIND)]
-    pub to: SocketAddr,
+    pub to: String,
     /// Send the message this many times, [1, 10000000].
     #[arg(long, default_value_t = 1)]
     pub repeat: u64,
-    /// Pause between repeats, ms.
+    /// Pause between repeats, ms, [0, 3600000].
     #[arg(long, default_value_t = 0)]
     pub interval_ms: u64,
+}
+
+/// Longest pause between repeats (an hour).
+pub const MAX_INTERVAL_MS: u64 = 3_600_000;
+
+/// Resolves `HOST:PORT` (an address or a name), preferring IPv4 (the listener's default).
+fn resolve(to: &str) -> Result<SocketAddr, String> {
+    use std::net::ToSocketAddrs;
+    let addrs: Vec<SocketAddr> = to
+        .to_socket_addrs()
+        .map_err(|e| format!("--to `{to}`: expected HOST:PORT, e.g. 127.0.0.1:9000 ({e})"))?
+        .collect();
+    addrs
+        .iter()
+        .find(|a| a.is_ipv4())
+        .or(addrs.first())
+        .copied()
+        .ok_or_else(|| format!("--to `{to}`: the name has no address"))
 }
 
 pub fn send(a: OscSendArgs) -> Result<(), String> {
@@ -41,7 +59,13 @@ pub fn send(a: OscSendArgs) -> Result<(), String> {
             a.repeat
         ));
     }
-    let tx = Sender::new(a.to).map_err(|e| e.to_string())?;
+    if a.interval_ms > MAX_INTERVAL_MS {
+        return Err(format!(
+            "--interval-ms {} is out of range [0, {MAX_INTERVAL_MS}] (an hour)",
+            a.interval_ms
+        ));
+    }
+    let tx = Sender::new(resolve(&a.to)?).map_err(|e| e.to_string())?;
     let bytes = fathom_live::send::encode(&a.address, &a.values).map_err(|e| e.to_string())?;
     for i in 0..a.repeat {
         tx.send_raw(&bytes).map_err(|e| e.to_string())?;
@@ -112,5 +136,51 @@ pub fn monitor(a: OscMonitorArgs) -> Result<(), String> {
             return Ok(());
         }
         std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::FromArgMatches;
+
+    fn args(list: &[&str]) -> Result<OscSendArgs, String> {
+        let cmd = OscSendArgs::augment_args(clap::Command::new("osc-send"));
+        let m = cmd
+            .try_get_matches_from(std::iter::once("osc-send").chain(list.iter().copied()))
+            .map_err(|e| e.to_string())?;
+        OscSendArgs::from_arg_matches(&m).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn the_help_examples_parse_with_options_after_the_values() {
+        let a = args(&[
+            "/muse/elements/alpha_absolute",
+            "0.4",
+            "0.5",
+            "0.45",
+            "0.38",
+            "--to",
+            "127.0.0.1:5000",
+        ])
+        .unwrap();
+        assert_eq!(a.values, [0.4, 0.5, 0.45, 0.38]);
+        assert_eq!(a.to, "127.0.0.1:5000");
+        let a = args(&["/fathom/light", "-0.25", "nan", "--repeat", "3"]).unwrap();
+        assert_eq!(a.values[0], -0.25);
+        assert!(a.values[1].is_nan());
+        assert_eq!(a.repeat, 3);
+    }
+
+    #[test]
+    fn names_resolve_and_out_of_range_values_are_refused() {
+        assert!(resolve("localhost:9000").unwrap().is_ipv4());
+        assert!(resolve("nowhere").unwrap_err().contains("HOST:PORT"));
+        let mut a = args(&["/x", "1", "--interval-ms", "18446744073709551615"]).unwrap();
+        let e = send(a).unwrap_err();
+        assert!(e.contains("[0, 3600000]"), "{e}");
+        a = args(&["/x", "1e39", "--to", "127.0.0.1:9"]).unwrap();
+        let e = send(a).unwrap_err();
+        assert!(e.contains("does not fit a 32-bit float"), "{e}");
     }
 }

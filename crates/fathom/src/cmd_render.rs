@@ -269,7 +269,9 @@ impl RenderArgs {
     }
 }
 
-fn open(p: &Option<PathBuf>) -> Result<Option<(std::fs::File, &Path)>, String> {
+fn open(
+    p: &Option<PathBuf>,
+) -> Result<Option<(fathom_core::atomic_file::AtomicFile, &Path)>, String> {
     p.as_deref()
         .map(|p| {
             output::open_output(p)
@@ -363,8 +365,7 @@ pub fn run(mut a: RenderArgs) -> Result<(), String> {
         output::save_steps(frame, f, p).map_err(|e| e.to_string())?;
     }
     if let Some((f, p)) = stats_file {
-        serde_json::to_writer_pretty(std::io::BufWriter::new(f), &r.stats)
-            .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+        output::save_json(&r.stats, f, p).map_err(|e| e.to_string())?;
     }
     if !a.quiet {
         if let Some(o) = &r.stats.octree {

@@ -47,7 +47,7 @@ pub struct SceneArgs {
 pub fn run(a: SceneArgs) -> Result<(), String> {
     let text = render(&a)?;
     match &a.output {
-        Some(path) => std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display())),
+        Some(path) => fathom_core::atomic_file::write(path, text).map_err(|e| e.to_string()),
         None => {
             print!("{text}");
             Ok(())

@@ -183,7 +183,7 @@ pub struct VolumeArgs {
     /// Samples per pixel, 1..=1048576.
     #[arg(long, default_value_t = 64)]
     pub spp: u32,
-    /// Worker threads (default: all cores).
+    /// Worker threads, [1, 1024] (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Output image: .png (tonemapped) or .exr (linear float RGB). Default volume.png, or
@@ -222,9 +222,14 @@ fn floats<const N: usize>(name: &str, s: &str, broadcast: bool) -> Result<[f32; 
     };
     let v: Vec<f32> = parts
         .iter()
-        .map(|p| p.parse::<f32>().ok().filter(|v| v.is_finite()))
+        .map(|p| p.parse::<f32>().ok())
         .collect::<Option<_>>()
         .ok_or_else(bad)?;
+    if let Some((p, _)) = parts.iter().zip(&v).find(|(_, v)| !v.is_finite()) {
+        return Err(format!(
+            "--{name} `{s}`: `{p}` is not a finite number (f32 holds up to about 3.4e38)"
+        ));
+    }
     match v.len() {
         1 if broadcast => Ok([v[0]; N]),
         n if n == N => Ok(std::array::from_fn(|i| v[i])),
@@ -390,14 +395,17 @@ pub fn run(a: VolumeArgs) -> Result<(), String> {
         (None, None) => Some(PathBuf::from("volume.png")),
         (None, Some(_)) => None,
     };
-    // Fail on unwritable outputs before the long work.
-    for p in output.iter().chain(&a.export).chain(&a.stats) {
-        std::fs::File::create(p).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    if let Some(o) = &output {
+        image_format(o)?;
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| e.to_string())?;
+    if let Some(e) = &a.export {
+        grid_format(e)?;
+    }
+    // Fail on unwritable outputs before the long work, without touching what is there.
+    for p in output.iter().chain(&a.export).chain(&a.stats) {
+        probe_output(p)?;
+    }
+    let pool = crate::args::thread_pool(a.threads)?;
     pool.install(|| {
         run_in_pool(
             &a,
@@ -410,6 +418,51 @@ pub fn run(a: VolumeArgs) -> Result<(), String> {
             limit,
         )
     })
+}
+
+/// Checks `path` can be written (its directory exists and takes a new file) by creating and
+/// removing its temporary file: the file itself is written atomically at the end, so a
+/// refused or failed run leaves an existing one as it was.
+fn probe_output(path: &std::path::Path) -> Result<(), String> {
+    fathom_core::atomic_file::AtomicFile::create(path)
+        .map(drop)
+        .map_err(|e| e.to_string())
+}
+
+/// Whether the image output is EXR (true) or PNG (false); other extensions are refused
+/// rather than written as PNG bytes under a name that says otherwise.
+fn image_format(path: &std::path::Path) -> Result<bool, String> {
+    match path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("exr") => Ok(true),
+        Some("png") => Ok(false),
+        other => Err(format!(
+            "{}: cannot write images {}; choose .png (tonemapped) or .exr (linear float RGB)",
+            path.display(),
+            match other {
+                Some(e) => format!("with extension `.{e}`"),
+                None => "without an extension".into(),
+            }
+        )),
+    }
+}
+
+/// Checks an `--export` path names a grid format before any work.
+fn grid_format(path: &std::path::Path) -> Result<(), String> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("vol") | Some("raw") => Ok(()),
+        _ => Err(format!(
+            "{}: unknown grid format (valid extensions: .vol for Mitsuba 3, .raw for fathom's \
+             raw grids)",
+            path.display()
+        )),
+    }
 }
 
 /// `--export-field distance`: the scene's signed distance sampled into a `.vol` grid.
@@ -438,11 +491,8 @@ fn export_distance(a: &VolumeArgs, src: Source, limit: u64) -> Result<(), String
                 .into(),
         );
     }
-    std::fs::File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| e.to_string())?;
+    probe_output(path)?;
+    let pool = crate::args::thread_pool(a.threads)?;
     let pb = std::sync::Mutex::new(None::<ProgressBar>);
     let grid = pool
         .install(|| {
@@ -546,10 +596,7 @@ fn run_in_pool(
         }
         pb.finish();
         let frame = prog.frame();
-        if out
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
-        {
+        if image_format(out)? {
             pipeline::save_exr(&frame, out).map_err(|e| e.to_string())?;
         } else {
             let f = fathom_trace::output::open_output(out).map_err(|e| e.to_string())?;
@@ -576,7 +623,7 @@ fn run_in_pool(
     if let Some(p) = &a.stats {
         let text = serde_json::to_string_pretty(&serde_json::Value::Object(stats))
             .map_err(|e| e.to_string())?;
-        std::fs::write(p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+        fathom_core::atomic_file::write(p, text).map_err(|e| e.to_string())?;
     }
     Ok(())
 }
@@ -672,7 +719,23 @@ mod tests {
         let out = tmp("bad.png");
         let truncated = tmp("truncated.vol");
         std::fs::write(&truncated, b"VOL\x03\x01\0\0\0\x02\0\0\0").unwrap();
+        // One voxel of a finite density whose extinction overflows (once hung the tracker).
+        let one_voxel = |name: &str, d: f32| {
+            let p = tmp(name);
+            let mut b = b"VOL\x03\x01\0\0\0\x01\0\0\0\x01\0\0\0\x01\0\0\0\x01\0\0\0".to_vec();
+            for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, d] {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+            std::fs::write(&p, b).unwrap();
+            p
+        };
+        let (dense, denser) = (one_voxel("1e36.vol", 1e36), one_voxel("1e38.vol", 1e38));
         let cases: Vec<(Vec<&str>, &str)> = vec![
+            (vec!["--grid", denser.as_str()], "more than the 1e12"),
+            (
+                vec!["--grid", dense.as_str(), "--density-scale", "1e6"],
+                "more than the 1e12",
+            ),
             (vec!["--spp", "0"], "spp = 0 is out of range: 1..="),
             (vec!["--g", "1"], "g = 1 is out of range: (-1, 1)"),
             (
@@ -685,8 +748,25 @@ mod tests {
             ),
             (
                 vec!["--env", "nan"],
-                "--env `nan` must be 3 comma-separated numbers",
+                "--env `nan`: `nan` is not a finite number",
             ),
+            (
+                vec!["--env", "inf"],
+                "--env `inf`: `inf` is not a finite number",
+            ),
+            (
+                vec!["--threads", "0"],
+                "--threads 0 is out of range [1, 1024]",
+            ),
+            (
+                vec!["--threads", "100000"],
+                "--threads 100000 is out of range [1, 1024]",
+            ),
+            (
+                vec!["--env", "2e6"],
+                "environment = constant 2000000,2000000,2000000",
+            ),
+            (vec!["--max-memory", "0"], "(0, 1e15] bytes"),
             (vec!["--density-scale", "-3"], "density scale = -3"),
             (
                 vec!["--sim", "physarum", "--grid", "0"],

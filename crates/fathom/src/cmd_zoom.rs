@@ -296,8 +296,7 @@ pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
     }
     let preset = zoom_path(a)?;
     for dir in [&a.output, &a.compare_images].into_iter().flatten() {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        fathom_core::atomic_file::create_output_dir(dir).map_err(|e| e.to_string())?;
     }
     let write = |f: &fathom_core::frame::Frame, path: &std::path::Path| {
         let file = fathom_trace::output::open_output(path).map_err(|e| e.to_string())?;
@@ -351,6 +350,12 @@ pub fn run(a: ZoomArgs) -> Result<(), String> {
     if a.shard.is_some() {
         return crate::cmd_farm::zoom_shard(&a);
     }
+    // The stats file is checked before the frames are rendered, not after.
+    if let Some(path) = &a.stats {
+        fathom_core::atomic_file::AtomicFile::create(path)
+            .map(drop)
+            .map_err(|e| e.to_string())?;
+    }
     let report = run_zoom(&a, false)?;
     let s = &report.summary;
     if report.warmup_frames > 0 {
@@ -396,7 +401,7 @@ pub fn run(a: ZoomArgs) -> Result<(), String> {
     }
     if let Some(path) = &a.stats {
         let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-        std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        fathom_core::atomic_file::write(path, text).map_err(|e| e.to_string())?;
     }
     Ok(())
 }

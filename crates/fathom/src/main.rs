@@ -88,6 +88,16 @@ pub fn clap_defaults<T: clap::Args + clap::FromArgMatches>() -> T {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Ctrl-C, SIGTERM or SIGHUP: remove every temporary file (half-written outputs, mesh
+    // spools) and exit 130, so an interrupted command leaves its outputs as they were. The
+    // explorer window keeps its own handling of the terminal.
+    if !matches!(cli.command, Some(Command::Explore(_)))
+        && let Err(e) = ctrlc::set_handler(|| fathom_core::cleanup::interrupted())
+    {
+        eprintln!(
+            "fathom: warning: no Ctrl-C handler ({e}); an interrupted run may leave temporary files"
+        );
+    }
     let result = match cli.command {
         None => cmd_explore::run_without_arguments(),
         Some(Command::Render(a)) => cmd_render::run(*a),

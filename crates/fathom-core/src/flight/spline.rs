@@ -138,13 +138,13 @@ pub fn scalar_at(knots: &[(f64, f64)], x: f64) -> f64 {
     if n == 0 {
         return 0.0;
     }
-    if x <= knots[0].0 || n == 1 {
+    if x <= knots[0].0 || n == 1 || x.is_nan() {
         return knots[0].1;
     }
     if x >= knots[n - 1].0 {
         return knots[n - 1].1;
     }
-    let i = knots.partition_point(|k| k.0 <= x) - 1;
+    let i = knots.partition_point(|k| k.0 <= x).clamp(1, n - 1) - 1;
     let (x1, v1) = knots[i];
     let (x2, v2) = knots[i + 1];
     let h = x2 - x1;

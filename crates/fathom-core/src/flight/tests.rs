@@ -333,3 +333,41 @@ fn the_example_dive_parses_and_stays_outside_the_bulb() {
         assert!(d > 0.0, "t {t}: the eye is inside (estimate {d:e})");
     }
 }
+
+#[test]
+fn tiny_key_scales_fly_without_overflow() {
+    // Scales of 1e-200 and below passed validation and made the pacing table infinite,
+    // then indexed past the fov knots.
+    let scene = scenes::sphere(1.0);
+    for tiny in [1e-200, 1e-300, 5e-324] {
+        let mut p = tour(&scene);
+        p.keys[1].scale = Some(tiny);
+        p.keys[3].scale = Some(1e200);
+        p.validate(&scene).unwrap();
+        let f = p.prepare(&scene, None).unwrap();
+        let times = f.key_times();
+        assert!(times.iter().all(|t| t.is_finite()), "{tiny}: {times:?}");
+        assert!(times.windows(2).all(|w| w[0] <= w[1]), "{tiny}: {times:?}");
+        for k in 0..=40 {
+            let c = f.sample(k as f64 * 0.25).camera;
+            assert!(c.eye.is_finite() && c.fov.is_finite(), "{tiny} at {k}");
+        }
+    }
+}
+
+#[test]
+fn the_scalar_spline_never_indexes_past_its_knots() {
+    let knots = [(0.0, 1.0), (1.0, 2.0), (2.0, 4.0)];
+    for x in [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        0.5,
+        1.5,
+        -1.0,
+        3.0,
+    ] {
+        let v = spline::scalar_at(&knots, x);
+        assert!(v.is_finite(), "{x}: {v}");
+    }
+}

@@ -3,18 +3,18 @@
 //! spooled vertex, colour and index streams, since its length and the position bounds go in
 //! the JSON, which comes first.
 
-use super::{Spool, io_err};
+use super::{Spool, commit, create_output, io_err};
 use crate::{MeshError, MeshSink, Vertex, Window};
+use fathom_core::atomic_file::AtomicFile;
 use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 pub struct GlbSink {
     path: PathBuf,
-    out: Option<File>,
+    out: Option<AtomicFile>,
     positions: Spool,
     colours: Spool,
     indices: Spool,
@@ -26,7 +26,7 @@ pub struct GlbSink {
 
 impl GlbSink {
     pub fn create(path: &Path) -> Result<Self, MeshError> {
-        let out = File::create(path).map_err(io_err(path))?;
+        let out = create_output(path)?;
         Ok(GlbSink {
             path: path.into(),
             out: Some(out),
@@ -117,7 +117,7 @@ impl MeshSink for GlbSink {
         self.positions.copy_to(&mut w, &self.path)?;
         self.colours.copy_to(&mut w, &self.path)?;
         self.indices.copy_to(&mut w, &self.path)?;
-        w.flush().map_err(&e)
+        commit(w, &self.path)
     }
 }
 

@@ -2,7 +2,9 @@
 //! vertex colours as the common `v x y z r g b` extension) and GLB (binary glTF 2.0, JSON via
 //! `gltf-json`).
 //!
-//! Every sink opens its output when it is made, so an unwritable path fails before any work.
+//! Every sink creates its output's temporary file when it is made, so an unwritable path fails
+//! before any work, and renames it into place only in [`MeshSink::finish`]: an existing file
+//! survives a refused, failed or interrupted run.
 //! Formats whose header holds counts (PLY, STL, GLB) spool the streamed vertices and triangles
 //! to files beside the output and assemble it in [`MeshSink::finish`], so memory stays
 //! bounded; OBJ streams straight through. Why our own PLY and OBJ writers: `ply-rs` builds
@@ -16,6 +18,8 @@ mod ply;
 mod stl;
 
 use crate::{MeshError, MeshSink};
+use fathom_core::atomic_file::AtomicFile;
+use fathom_core::cleanup::Pending;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
@@ -75,8 +79,11 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> MeshError + '_ {
     }
 }
 
-/// A temporary file beside the output holding one stream of records; removed when dropped.
+/// A temporary file beside the output holding one stream of records: registered with
+/// [`fathom_core::cleanup`], so it is removed when dropped (an error, the end of the run) and
+/// by the command's Ctrl-C handler.
 struct Spool {
+    temp: Pending,
     path: PathBuf,
     w: Option<BufWriter<File>>,
     pub bytes: u64,
@@ -87,8 +94,10 @@ impl Spool {
         let mut name = out.file_name().unwrap_or_default().to_os_string();
         name.push(format!(".{tag}.part"));
         let path = out.with_file_name(name);
-        let f = File::create(&path).map_err(io_err(&path))?;
+        let (temp, f) =
+            Pending::create(path.clone(), |p| File::create(p)).map_err(io_err(&path))?;
         Ok(Spool {
+            temp,
             path,
             w: Some(BufWriter::with_capacity(1 << 20, f)),
             bytes: 0,
@@ -130,9 +139,23 @@ impl Spool {
 
 impl Drop for Spool {
     fn drop(&mut self) {
+        // Closed before `temp` removes the file.
         self.w = None;
-        let _ = std::fs::remove_file(&self.path);
+        debug_assert_eq!(self.temp.path(), self.path);
     }
+}
+
+/// Creates the output's temporary file (see [`fathom_core::atomic_file`]): the sink fills
+/// it and commits it in `finish`, so a refused, failed or interrupted run leaves an existing
+/// file as it was.
+fn create_output(path: &Path) -> Result<AtomicFile, MeshError> {
+    Ok(AtomicFile::create(path)?)
+}
+
+/// Flushes `w` and renames its file into place.
+fn commit(w: BufWriter<AtomicFile>, path: &Path) -> Result<(), MeshError> {
+    let f = w.into_inner().map_err(|e| io_err(path)(e.into_error()))?;
+    Ok(f.commit()?)
 }
 
 #[cfg(test)]

@@ -1,26 +1,26 @@
 //! Wavefront OBJ, streamed: `v x y z r g b` lines (colours in [0, 1], the extension MeshLab,
 //! Blender and tobj read) as vertices arrive, `f a b c` lines (1-based) as triangles do.
 
-use super::io_err;
+use super::{commit, create_output, io_err};
 use crate::{MeshError, MeshSink, Vertex, Window};
+use fathom_core::atomic_file::AtomicFile;
 use std::fmt::Write as _;
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 pub struct ObjSink {
     path: PathBuf,
-    w: BufWriter<File>,
+    w: Option<BufWriter<AtomicFile>>,
 }
 
 impl ObjSink {
     pub fn create(path: &Path) -> Result<Self, MeshError> {
-        let f = File::create(path).map_err(io_err(path))?;
+        let f = create_output(path)?;
         let mut w = BufWriter::with_capacity(1 << 20, f);
         w.write_all(b"# made by fathom\n").map_err(io_err(path))?;
         Ok(ObjSink {
             path: path.into(),
-            w,
+            w: Some(w),
         })
     }
 }
@@ -36,7 +36,11 @@ impl MeshSink for ObjSink {
                 x.p[0], x.p[1], x.p[2], c[0], c[1], c[2]
             );
         }
-        self.w.write_all(s.as_bytes()).map_err(io_err(&self.path))
+        self.w
+            .as_mut()
+            .expect("written before finish")
+            .write_all(s.as_bytes())
+            .map_err(io_err(&self.path))
     }
 
     fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), MeshError> {
@@ -50,10 +54,15 @@ impl MeshSink for ObjSink {
                 tri[2] as u64 + 1
             );
         }
-        self.w.write_all(s.as_bytes()).map_err(io_err(&self.path))
+        self.w
+            .as_mut()
+            .expect("written before finish")
+            .write_all(s.as_bytes())
+            .map_err(io_err(&self.path))
     }
 
     fn finish(&mut self) -> Result<(), MeshError> {
-        self.w.flush().map_err(io_err(&self.path))
+        let w = self.w.take().expect("finish called once");
+        commit(w, &self.path)
     }
 }

@@ -1,15 +1,15 @@
 //! Binary little-endian PLY with per-vertex sRGB colours (`red green blue` as uchar), faces as
 //! `uchar` counts of `uint` indices: the layout MeshLab, Blender and most slicers read.
 
-use super::{Spool, io_err};
+use super::{Spool, commit, create_output, io_err};
 use crate::{MeshError, MeshSink, Vertex, Window};
-use std::fs::File;
+use fathom_core::atomic_file::AtomicFile;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 pub struct PlySink {
     path: PathBuf,
-    out: Option<File>,
+    out: Option<AtomicFile>,
     verts: Spool,
     faces: Spool,
     nv: u64,
@@ -18,7 +18,7 @@ pub struct PlySink {
 
 impl PlySink {
     pub fn create(path: &Path) -> Result<Self, MeshError> {
-        let out = File::create(path).map_err(io_err(path))?;
+        let out = create_output(path)?;
         Ok(PlySink {
             path: path.into(),
             out: Some(out),
@@ -68,6 +68,6 @@ impl MeshSink for PlySink {
         w.write_all(header.as_bytes()).map_err(io_err(&self.path))?;
         self.verts.copy_to(&mut w, &self.path)?;
         self.faces.copy_to(&mut w, &self.path)?;
-        w.flush().map_err(io_err(&self.path))
+        commit(w, &self.path)
     }
 }

@@ -2,22 +2,23 @@
 //! triangle count, so triangles are spooled as position triples while meshing and handed to
 //! `stl_io::write_stl` as an exact-size iterator at the end.
 
-use super::{Spool, io_err};
+use super::{Spool, commit, create_output, io_err};
 use crate::{MeshError, MeshSink, Vertex, Window};
+use fathom_core::atomic_file::AtomicFile;
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
 pub struct StlSink {
     path: PathBuf,
-    out: Option<File>,
+    out: Option<AtomicFile>,
     tris: Spool,
     count: u64,
 }
 
 impl StlSink {
     pub fn create(path: &Path) -> Result<Self, MeshError> {
-        let out = File::create(path).map_err(io_err(path))?;
+        let out = create_output(path)?;
         Ok(StlSink {
             path: path.into(),
             out: Some(out),
@@ -56,17 +57,18 @@ impl MeshSink for StlSink {
                 ),
             });
         }
-        let mut out = self.out.take().expect("finish called once");
+        let out = self.out.take().expect("finish called once");
+        let mut w = std::io::BufWriter::with_capacity(1 << 20, out);
         let mut it = Triangles {
             r: self.tris.reader()?,
             left: self.count as usize,
             error: None,
         };
-        stl_io::write_stl(&mut out, &mut it).map_err(io_err(&self.path))?;
-        match it.error {
-            Some(e) => Err(e),
-            None => Ok(()),
+        stl_io::write_stl(&mut w, &mut it).map_err(io_err(&self.path))?;
+        if let Some(e) = it.error {
+            return Err(e);
         }
+        commit(w, &self.path)
     }
 }
 

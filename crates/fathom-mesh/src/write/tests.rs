@@ -133,5 +133,32 @@ fn unknown_extensions_and_unwritable_paths_fail_at_once() {
     let e = create(std::path::Path::new("/nonexistent-dir/x.ply"))
         .err()
         .unwrap();
-    assert!(matches!(e, crate::MeshError::Io { .. }), "{e}");
+    assert!(matches!(e, crate::MeshError::Write(_)), "{e}");
+    assert!(e.to_string().contains("does not exist"), "{e}");
+}
+
+#[test]
+fn an_unfinished_sink_leaves_the_old_file_and_no_spools() {
+    let d = std::env::temp_dir().join(format!("fathom-mesh-unfinished-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    for ext in ["ply", "stl", "obj", "glb"] {
+        let path = d.join(format!("m.{ext}"));
+        std::fs::write(&path, b"old").unwrap();
+        let mut sink = create(&path).unwrap();
+        let v = crate::Vertex {
+            p: [0.0, 1.0, 2.0],
+            colour: [1, 2, 3],
+        };
+        sink.vertices(&[v; 3]).unwrap();
+        // A refused or failed run drops its sink without finishing it.
+        drop(sink);
+        assert_eq!(std::fs::read(&path).unwrap(), b"old", "{ext}");
+        let left: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(left.len(), 1, "{ext}: {left:?}");
+        std::fs::remove_file(&path).unwrap();
+    }
+    std::fs::remove_dir_all(&d).ok();
 }

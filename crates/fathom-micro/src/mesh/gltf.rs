@@ -6,8 +6,10 @@
 
 use super::{RawMesh, check_counts, read_limited};
 use crate::error::MeshError;
+use crate::limits;
 use base64::Engine;
 use glam::{DMat3, DMat4, DVec2, DVec3};
+use std::collections::HashSet;
 use std::path::Path;
 
 /// Reads a `.gltf` or `.glb` file.
@@ -154,6 +156,18 @@ pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, 
         document: gltf::Document::from_json(json).map_err(not_gltf)?,
         blob: raw.blob,
     };
+    // Every buffer's declared size first: together they may not pass the file limit.
+    let declared: u64 = doc.buffers().map(|b| b.length() as u64).sum();
+    if declared > limits::MAX_MESH_FILE_BYTES {
+        return Err(invalid(
+            origin,
+            format!(
+                "the buffers declare {declared} bytes in all; a mesh's buffers are limited \
+                 to {} bytes",
+                limits::MAX_MESH_FILE_BYTES
+            ),
+        ));
+    }
     let mut buffers = Vec::new();
     for b in doc.buffers() {
         let data = match b.source() {
@@ -203,23 +217,7 @@ pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, 
         buffers.push(data);
     }
     // Meshes with their world transforms: the default scene's nodes, or every mesh once.
-    let mut instances: Vec<(gltf::Mesh, DMat4)> = Vec::new();
-    fn walk<'a>(n: gltf::Node<'a>, parent: DMat4, out: &mut Vec<(gltf::Mesh<'a>, DMat4)>) {
-        let m = parent
-            * DMat4::from_cols_array_2d(&n.transform().matrix().map(|c| c.map(|x| x as f64)));
-        if let Some(mesh) = n.mesh() {
-            out.push((mesh, m));
-        }
-        for c in n.children() {
-            walk(c, m, out);
-        }
-    }
-    match doc.default_scene().or_else(|| doc.scenes().next()) {
-        Some(s) => s
-            .nodes()
-            .for_each(|n| walk(n, DMat4::IDENTITY, &mut instances)),
-        None => instances.extend(doc.meshes().map(|m| (m, DMat4::IDENTITY))),
-    }
+    let instances = instances(&doc, origin)?;
     // Sizes first, from the accessors, before reading anything.
     let (mut nv, mut nt) = (0u64, 0u64);
     for (mesh, _) in &instances {
@@ -233,6 +231,7 @@ pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, 
         }
     }
     check_counts(origin, nv, nt)?;
+    check_ranges(&instances, origin)?;
     let mut raw = RawMesh::default();
     let (mut normals, mut uvs) = (Vec::new(), Vec::new());
     let (mut all_n, mut all_t) = (true, true);
@@ -302,4 +301,206 @@ pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, 
     raw.corner_normals = all_n.then_some(normals);
     raw.corner_uvs = all_t.then_some(uvs);
     Ok(raw)
+}
+
+/// A node's name for messages: `node 3 (`wheel`)`, or `node 3` when it has none.
+fn node_name(n: &gltf::Node) -> String {
+    match n.name() {
+        Some(name) => format!("node {} (`{name}`)", n.index()),
+        None => format!("node {}", n.index()),
+    }
+}
+
+/// The meshes the default scene (or the first) reaches, each with its node's world
+/// transform; every mesh once, untransformed, when the file has no scene. The node graph is
+/// walked iteratively, after checking it is what glTF requires (2.0, section 3.5.3): a set
+/// of disjoint trees, each node with at most one parent and none its own ancestor, the
+/// scene's nodes being roots. So a node reached once is read once: no cycle recurses and no
+/// shared child multiplies the vertices behind it.
+fn instances<'a>(
+    doc: &'a gltf::Gltf,
+    origin: &str,
+) -> Result<Vec<(gltf::Mesh<'a>, DMat4)>, MeshError> {
+    let Some(scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
+        return Ok(doc.meshes().map(|m| (m, DMat4::IDENTITY)).collect());
+    };
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut parent: Vec<Option<usize>> = vec![None; nodes.len()];
+    for n in &nodes {
+        for c in n.children() {
+            if let Some(p) = parent[c.index()] {
+                let msg = if p == n.index() {
+                    format!(
+                        "{} lists {} twice among its children",
+                        node_name(n),
+                        node_name(&c)
+                    )
+                } else {
+                    format!(
+                        "{} is a child of both {} and {}; a glTF node has at most one parent",
+                        node_name(&c),
+                        node_name(&nodes[p]),
+                        node_name(n)
+                    )
+                };
+                return Err(invalid(origin, msg));
+            }
+            parent[c.index()] = Some(n.index());
+        }
+    }
+    // With one parent each, a cycle is a loop of parent links: follow them from every node,
+    // colouring the nodes of the current chain, so each node is visited once in all.
+    let mut state = vec![0u8; nodes.len()]; // 0 unseen, 1 on the current chain, 2 done
+    for start in 0..nodes.len() {
+        let mut chain = Vec::new();
+        let mut at = Some(start);
+        while let Some(i) = at {
+            match state[i] {
+                2 => break,
+                1 => {
+                    let from = chain.iter().position(|&c| c == i).unwrap_or(0);
+                    // Parent to child: i, its child on the loop, ..., i again.
+                    let mut names = vec![node_name(&nodes[i])];
+                    names.extend(chain[from..].iter().rev().map(|&c| node_name(&nodes[c])));
+                    return Err(invalid(
+                        origin,
+                        format!(
+                            "{} is its own ancestor ({}); glTF node hierarchies have no cycles",
+                            node_name(&nodes[i]),
+                            names.join(" -> ")
+                        ),
+                    ));
+                }
+                _ => {
+                    state[i] = 1;
+                    chain.push(i);
+                    at = parent[i];
+                }
+            }
+        }
+        for c in chain {
+            state[c] = 2;
+        }
+    }
+    let mut roots = HashSet::new();
+    let mut out = Vec::new();
+    let mut stack: Vec<(gltf::Node, DMat4)> = Vec::new();
+    for n in scene.nodes() {
+        if let Some(p) = parent[n.index()] {
+            return Err(invalid(
+                origin,
+                format!(
+                    "scene {} lists {} as a root, but it is a child of {}",
+                    scene.index(),
+                    node_name(&n),
+                    node_name(&nodes[p])
+                ),
+            ));
+        }
+        if !roots.insert(n.index()) {
+            return Err(invalid(
+                origin,
+                format!("scene {} lists {} twice", scene.index(), node_name(&n)),
+            ));
+        }
+        stack.push((n, DMat4::IDENTITY));
+        while let Some((n, up)) = stack.pop() {
+            let m = up
+                * DMat4::from_cols_array_2d(&n.transform().matrix().map(|c| c.map(|x| x as f64)));
+            if let Some(mesh) = n.mesh() {
+                out.push((mesh, m));
+            }
+            // Reversed, so children are read in the file's order.
+            let kids: Vec<gltf::Node> = n.children().collect();
+            stack.extend(kids.into_iter().rev().map(|c| (c, m)));
+        }
+    }
+    Ok(out)
+}
+
+/// Checks that every accessor a triangle primitive reads lies inside its buffer view, and
+/// every such view inside its buffer, with the byte ranges in the message (the `gltf`
+/// crate's reader returns nothing for an accessor past its data, which would read as a
+/// primitive without positions). Only called after the counts passed the limits.
+fn check_ranges(instances: &[(gltf::Mesh, DMat4)], origin: &str) -> Result<(), MeshError> {
+    let mut seen = HashSet::new();
+    for (mesh, _) in instances {
+        for (k, p) in mesh
+            .primitives()
+            .enumerate()
+            .filter(|(_, p)| p.mode() == gltf::mesh::Mode::Triangles)
+        {
+            let used = [
+                ("POSITION", p.get(&gltf::Semantic::Positions)),
+                ("NORMAL", p.get(&gltf::Semantic::Normals)),
+                ("TEXCOORD_0", p.get(&gltf::Semantic::TexCoords(0))),
+                ("indices", p.indices()),
+            ];
+            if used[0].1.is_none() {
+                return Err(invalid(
+                    origin,
+                    format!(
+                        "mesh {} primitive {k} has no POSITION attribute",
+                        mesh.index()
+                    ),
+                ));
+            }
+            for (what, a) in used {
+                let Some(a) = a else { continue };
+                if !seen.insert(a.index()) {
+                    continue;
+                }
+                let at = |msg: String| {
+                    invalid(
+                        origin,
+                        format!(
+                            "mesh {} primitive {k}: {what} accessor {}: {msg}",
+                            mesh.index(),
+                            a.index()
+                        ),
+                    )
+                };
+                let Some(view) = a.view() else {
+                    if a.sparse().is_some() {
+                        continue;
+                    }
+                    return Err(at("has no buffer view (fathom reads vertex data from \
+                                   buffers)"
+                        .into()));
+                };
+                let size = a.size() as u64;
+                let stride = view.stride().map_or(size, |s| s as u64);
+                let end = (a.count() as u64 - 1)
+                    .checked_mul(stride)
+                    .and_then(|v| v.checked_add(a.offset() as u64))
+                    .and_then(|v| v.checked_add(size));
+                match end {
+                    Some(end) if end <= view.length() as u64 => {}
+                    _ => {
+                        return Err(at(format!(
+                            "{} elements of {size} bytes (stride {stride}) from byte {} need \
+                             more than the {} bytes of buffer view {}",
+                            a.count(),
+                            a.offset(),
+                            view.length(),
+                            view.index()
+                        )));
+                    }
+                }
+                let buffer = view.buffer();
+                let vend = (view.offset() as u64).checked_add(view.length() as u64);
+                if vend.is_none_or(|e| e > buffer.length() as u64) {
+                    return Err(at(format!(
+                        "buffer view {} spans bytes {}..{} of buffer {}, which holds {}",
+                        view.index(),
+                        view.offset(),
+                        vend.map_or("(overflow)".into(), |e| e.to_string()),
+                        buffer.index(),
+                        buffer.length()
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
 }

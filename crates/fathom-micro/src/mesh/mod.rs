@@ -332,16 +332,17 @@ pub fn non_manifold_edges(tris: &[[u32; 3]]) -> usize {
 #[cfg(test)]
 mod tests;
 
-/// Reads a file, refusing it before reading when it exceeds [`limits::MAX_MESH_FILE_BYTES`].
+/// Reads a file, refusing it before reading when it exceeds [`limits::MAX_MESH_FILE_BYTES`]
+/// or is not a regular file (a FIFO would block, a device such as `/dev/zero` never ends).
 pub fn read_limited(path: &Path) -> Result<Vec<u8>, MeshError> {
+    use fathom_core::input_file::{self, ReadError};
     let origin = path.display().to_string();
-    let io = |source| MeshError::Io {
-        origin: origin.clone(),
-        source,
-    };
-    let size = std::fs::metadata(path).map_err(io)?.len();
-    if size > limits::MAX_MESH_FILE_BYTES {
-        return Err(MeshError::FileTooLarge { origin, size });
-    }
-    std::fs::read(path).map_err(io)
+    input_file::read(path, limits::MAX_MESH_FILE_BYTES).map_err(|e| match e {
+        ReadError::TooLarge { size, .. } => MeshError::FileTooLarge { origin, size },
+        ReadError::Io { source, .. } => MeshError::Io { origin, source },
+        ReadError::NotAFile { kind, .. } => MeshError::Invalid {
+            origin,
+            msg: format!("it is a {kind}, not a regular file; it was not read"),
+        },
+    })
 }

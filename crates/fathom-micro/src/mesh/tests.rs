@@ -482,3 +482,186 @@ fn obj_corpus_replays() {
         }
     }
 }
+
+/// `gltf_json`'s triangle with its scene and nodes replaced.
+fn gltf_with_nodes(scene_nodes: &str, nodes: &str) -> String {
+    gltf_json(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        &[0, 2, 1],
+    )
+    .replace(
+        r#""scenes":[{"nodes":[0]}]"#,
+        &format!(r#""scenes":[{{"nodes":{scene_nodes}}}]"#),
+    )
+    .replace(
+        r#""nodes":[{"mesh":0,"translation":[0,2,0]}]"#,
+        &format!(r#""nodes":{nodes}"#),
+    )
+}
+
+#[test]
+fn gltf_node_cycles_are_refused_by_name() {
+    let t = std::time::Instant::now();
+    let self_child = gltf_with_nodes("[0]", r#"[{"name":"loop","mesh":0,"children":[0]}]"#);
+    let e = gltf::parse(self_child.as_bytes(), None, "self.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("self.gltf: ") && e.contains("node 0 (`loop`)") && e.contains("ancestor"),
+        "{e}"
+    );
+    let two = gltf_with_nodes(
+        "[0]",
+        r#"[{"name":"a","mesh":0,"children":[1]},{"name":"b","children":[0]}]"#,
+    );
+    let e = gltf::parse(two.as_bytes(), None, "two.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("`a`") && e.contains("`b`") && e.contains("ancestor"),
+        "{e}"
+    );
+    // A cycle off the scene's trees is refused too (the file is not valid glTF).
+    let aside = gltf_with_nodes(
+        "[0]",
+        r#"[{"mesh":0},{"name":"x","children":[2]},{"name":"y","children":[1]}]"#,
+    );
+    let e = gltf::parse(aside.as_bytes(), None, "aside.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`x`") && e.contains("ancestor"), "{e}");
+    assert!(t.elapsed().as_secs_f64() < 5.0);
+}
+
+#[test]
+fn a_deep_gltf_node_chain_is_walked_without_recursion() {
+    // 200,001 nodes, each the child of the one before, the last holding the mesh: the
+    // recursive walk overflowed the stack.
+    let n = 200_001;
+    let mut nodes = String::from("[");
+    for i in 0..n {
+        if i + 1 < n {
+            nodes.push_str(&format!(
+                r#"{{"children":[{}],"translation":[0,1e-5,0]}},"#,
+                i + 1
+            ));
+        } else {
+            nodes.push_str(r#"{"mesh":0}]"#);
+        }
+    }
+    let json = gltf_with_nodes("[0]", &nodes);
+    let raw = gltf::parse(json.as_bytes(), None, "chain.gltf").unwrap();
+    assert_eq!(raw.triangles.len(), 1);
+    // Every translation on the way applies: 200,000 x 1e-5 up.
+    assert!(
+        (raw.positions[0].y - 2.0).abs() < 1e-6,
+        "{}",
+        raw.positions[0]
+    );
+}
+
+#[test]
+fn shared_gltf_children_are_refused_before_anything_is_multiplied() {
+    // 42 levels, each node listing the next twice: 2^42 instances of the mesh once
+    // allocated gigabytes; a node listed twice or under two parents is not a tree.
+    let levels = 42;
+    let mut nodes = String::from("[");
+    for i in 0..levels {
+        nodes.push_str(&format!(r#"{{"children":[{0},{0}]}},"#, i + 1));
+    }
+    nodes.push_str(r#"{"mesh":0}]"#);
+    let json = gltf_with_nodes("[0]", &nodes);
+    let t = std::time::Instant::now();
+    let e = gltf::parse(json.as_bytes(), None, "dag.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("node 0 lists node 1 twice"), "{e}");
+    let json = gltf_with_nodes(
+        "[0,1]",
+        r#"[{"name":"car","children":[2]},{"name":"truck","children":[2]},{"name":"wheel","mesh":0}]"#,
+    );
+    let e = gltf::parse(json.as_bytes(), None, "dag.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("node 2 (`wheel`) is a child of both node 0 (`car`) and node 1 (`truck`)"),
+        "{e}"
+    );
+    // A mesh shared by many nodes is fine, and counts once per node against the limits.
+    let json = gltf_with_nodes("[0,1,2]", r#"[{"mesh":0},{"mesh":0},{"mesh":0}]"#);
+    assert_eq!(
+        gltf::parse(json.as_bytes(), None, "ok.gltf")
+            .unwrap()
+            .triangles
+            .len(),
+        3
+    );
+    assert!(t.elapsed().as_secs_f64() < 5.0);
+}
+
+#[test]
+fn gltf_accessors_past_their_data_say_which_bytes() {
+    let json = gltf_json(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        &[0, 2, 1],
+    );
+    // The position accessor claims 4 elements in a view of 36 bytes.
+    let e = gltf::parse(
+        set_number(&json, "count", 0, "4").as_bytes(),
+        None,
+        "over.gltf",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("POSITION accessor 0") && e.contains("36 bytes of buffer view 0"),
+        "{e}"
+    );
+    // The view claims more than its buffer.
+    let e = gltf::parse(
+        set_number(&json, "byteLength", 1, "1000").as_bytes(),
+        None,
+        "view.gltf",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("buffer view 0 spans bytes 0..1000 of buffer 0"),
+        "{e}"
+    );
+    assert!(!e.contains("without positions"), "{e}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+
+    /// Random node graphs (children lists drawn freely, cycles and shared children
+    /// included) over the triangle mesh: a mesh or an error naming the file, quickly.
+    #[test]
+    fn gltf_node_graphs_never_panic(
+        graph in proptest::collection::vec(
+            (proptest::collection::vec(0usize..8, 0..4), any::<bool>()),
+            1..8,
+        ),
+        roots in proptest::collection::vec(0usize..8, 0..4),
+    ) {
+        let n = graph.len();
+        let nodes: Vec<String> = graph
+            .iter()
+            .map(|(kids, mesh)| {
+                let kids: Vec<String> = kids.iter().map(|k| (k % n).to_string()).collect();
+                let mesh = if *mesh { r#""mesh":0,"# } else { "" };
+                format!(r#"{{{mesh}"children":[{}]}}"#, kids.join(","))
+            })
+            .collect();
+        let roots: Vec<String> = roots.iter().map(|r| (r % n).to_string()).collect();
+        let json = gltf_with_nodes(
+            &format!("[{}]", roots.join(",")),
+            &format!("[{}]", nodes.join(",")),
+        );
+        match gltf::parse(json.as_bytes(), None, "graph.gltf") {
+            Ok(raw) => prop_assert!(raw.triangles.len() <= n),
+            Err(e) => prop_assert!(e.to_string().starts_with("graph.gltf: "), "{}", e),
+        }
+    }
+}

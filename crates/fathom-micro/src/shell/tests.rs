@@ -107,6 +107,10 @@ fn bad_shell_heights_are_refused_with_the_range() {
             e.contains("shell height") && e.contains("bounding-box diagonal"),
             "{e}"
         );
+        // The height itself is reported, not its ratio to the diagonal.
+        if h.is_finite() {
+            assert!(e.contains(&format!("shell height = {h} ")), "{e}");
+        }
     }
     let bad = Tiling {
         tiles: 0.0,

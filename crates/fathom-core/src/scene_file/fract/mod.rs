@@ -107,6 +107,8 @@ impl Reader<'_> {
         let mut s = Sections::default();
         let mut first = true;
         let mut section = Section::Skipped;
+        // A byte-order mark (some Windows editors write one) is not part of the header.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let l = raw.trim_end_matches('\r');
@@ -443,6 +445,18 @@ pub fn parse(text: &str, origin: &str) -> Result<Imported, SceneFileError> {
         main.number("bailout", 100.0)?
     };
     let de_factor = main.number("DE_factor", 1.0)?;
+    // A value fathom changes is reported with its line, never changed silently.
+    let clamp_noted = |key: &str, v: f64, lo: f64, hi: f64, warnings: &mut Vec<String>| {
+        let c = v.clamp(lo, hi);
+        if c != v {
+            let line = main.map.get(key).map_or(0, |s| s.line);
+            warnings.push(format!(
+                "{origin}:{line}: `{key}` = {v} is outside the range fathom supports for \
+                 {formula_name}, [{lo}, {hi}]; clamped to {c}"
+            ));
+        }
+        c
+    };
     let frac = Keys::new(&r, &sections.fractal[0]);
     let (shape, default_safety) = match formula {
         1 | 2 => {
@@ -465,7 +479,10 @@ pub fn parse(text: &str, origin: &str) -> Result<Imported, SceneFileError> {
             let c = Call::new(Fractal::Mandelbulb)
                 .with("power", &[p])
                 .with("iterations", &[iterations])
-                .with("bailout", &[bailout.clamp(1.0, 1e3)])
+                .with(
+                    "bailout",
+                    &[clamp_noted("bailout", bailout, 1.0, 1e3, &mut warnings)],
+                )
                 .with("azimuth_offset", &[alpha.rem_euclid(360.0)])
                 .with("polar_offset", &[polar]);
             (c, 0.8)
@@ -499,16 +516,28 @@ pub fn parse(text: &str, origin: &str) -> Result<Imported, SceneFileError> {
                     &[frac.ranged("mandelbox_folding_fixed_radius", 1.0, 0.01, 4.0)?],
                 )
                 .with("iterations", &[iterations])
-                .with("bailout", &[bailout.clamp(2.0, 1e6)]);
+                .with(
+                    "bailout",
+                    &[clamp_noted("bailout", bailout, 2.0, 1e6, &mut warnings)],
+                );
             (c, 0.6)
         }
         _ => unreachable!("checked against FORMULAS"),
     };
     let mut shape = shape;
     if formula != 7 {
-        shape
-            .set("safety", &[(default_safety * de_factor).clamp(0.01, 1.0)])
-            .expect("clamped into range");
+        // fathom's safety factor is [0.01, 1]: DE_factor scales the formula's default.
+        let safety = default_safety * de_factor;
+        let clamped = safety.clamp(0.01, 1.0);
+        if clamped != safety {
+            let line = main.map.get("DE_factor").map_or(0, |s| s.line);
+            warnings.push(format!(
+                "{origin}:{line}: `DE_factor` = {de_factor} makes the step safety factor \
+                 {safety} ({default_safety} x DE_factor), outside the range fathom supports, \
+                 [0.01, 1]; clamped to {clamped}"
+            ));
+        }
+        shape.set("safety", &[clamped]).expect("clamped into range");
     }
 
     // Camera.

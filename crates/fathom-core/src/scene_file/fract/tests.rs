@@ -187,3 +187,128 @@ fn the_fract_corpus_replays() {
     }
     assert!(n >= 10, "corpus has {n} files");
 }
+
+#[test]
+fn a_byte_order_mark_is_not_part_of_the_header() {
+    let im = parse(&format!("\u{feff}{BULB}"), "bom.fract").unwrap();
+    assert_eq!(im.image_size, (1920, 1080));
+}
+
+#[test]
+fn values_fathom_changes_are_warned_with_their_line() {
+    for (setting, key, line, clamped) in [
+        ("DE_factor 0;", "DE_factor", 5, "clamped to 0.01"),
+        ("DE_factor -1;", "DE_factor", 5, "clamped to 0.01"),
+        ("DE_factor 1e6;", "DE_factor", 5, "clamped to 1"),
+        ("bailout 0;", "bailout", 5, "clamped to 1"),
+        ("bailout -5;", "bailout", 5, "clamped to 1"),
+        ("bailout 1e300;", "bailout", 5, "clamped to 1000"),
+    ] {
+        let text = format!(
+            "# Mandelbulber settings file\n[main_parameters]\nformula_1 2;\n\
+             use_default_bailout false;\n{setting}\n[fractal_1]\npower 8;\n"
+        );
+        let im = parse(&text, "w.fract").unwrap();
+        let w = im.warnings.join("\n");
+        let want = format!("w.fract:{line}: `{key}`");
+        assert!(w.contains(&want) && w.contains(clamped), "{setting}: {w}");
+    }
+    // In range: no warning.
+    let im = parse(
+        "# Mandelbulber settings file\n[main_parameters]\nDE_factor 0.5;\n",
+        "ok.fract",
+    )
+    .unwrap();
+    assert!(!im.warnings.join("\n").contains("DE_factor"));
+}
+
+/// Mandelbulber's own example files (from its Debian package, which scripts/setup.sh
+/// installs), each mutated a few ways from a fixed seed: every outcome is a scene that
+/// compiles or an error with a position (or a size refusal), never a panic.
+#[test]
+fn mutated_shipped_examples_import_or_fail_with_a_position() {
+    let dir = std::path::Path::new("/usr/share/mandelbulber2/examples");
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        panic!("{} is missing: run scripts/setup.sh", dir.display());
+    };
+    let mut files: Vec<_> = entries
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| is_fract(p))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 10, "{} examples", files.len());
+    // A small deterministic generator (xorshift): the same mutations on every run.
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    const PIECES: &[&str] = &[
+        ";",
+        " ",
+        "\n",
+        "[",
+        "]",
+        "1e308",
+        "-1e308",
+        "nan",
+        "inf",
+        "0",
+        "-0",
+        ",",
+        "#",
+        "\u{feff}",
+        "DE_factor 0;\n",
+        "bailout 1e300;\n",
+        "N 0;\n",
+        "fov -1;\n",
+        "formula_1 8;\n",
+        "camera 0 0 0;\n",
+        "image_width 0;\n",
+        "power 1e9;\n",
+    ];
+    let mut cases = 0;
+    for path in files.iter().take(60) {
+        let text = std::fs::read_to_string(path).unwrap();
+        let name = path.display().to_string();
+        for _ in 0..8 {
+            let mut t = text.clone().into_bytes();
+            for _ in 0..(1 + next() % 4) {
+                let at = (next() % (t.len() as u64 + 1)) as usize;
+                match next() % 4 {
+                    0 => {
+                        let p = PIECES[(next() % PIECES.len() as u64) as usize];
+                        t.splice(at..at, p.bytes());
+                    }
+                    1 => {
+                        let end = (at + (next() % 40) as usize).min(t.len());
+                        t.drain(at..end);
+                    }
+                    2 => t.truncate(at),
+                    _ => {
+                        if at < t.len() {
+                            t[at] = next() as u8;
+                        }
+                    }
+                }
+            }
+            let t = String::from_utf8_lossy(&t);
+            match parse(&t, &name) {
+                Ok(im) => {
+                    Tape::compile(&im.scene).unwrap_or_else(|e| panic!("{name}: {e}"));
+                }
+                Err(e) => assert!(
+                    e.position().is_some()
+                        || matches!(e, SceneFileError::TooLarge { .. })
+                        || matches!(e, SceneFileError::Invalid { .. }),
+                    "{name}: {e}"
+                ),
+            }
+            cases += 1;
+        }
+    }
+    assert!(cases >= 80);
+}
