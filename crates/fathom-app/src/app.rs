@@ -180,8 +180,10 @@ pub struct ExplorerApp {
     /// The window's own tape (distance at the eye, picking).
     tape: Tape,
     history: History,
-    /// The widget of the last edit, so a drag is one undo step.
-    gesture: Option<egui::Id>,
+    /// The gesture of the last edit, so a drag is one undo step.
+    gesture: Option<Gesture>,
+    /// Pointer presses so far (a gesture's identity).
+    presses: u64,
     edit_label: String,
     pub camera: CameraController,
     pub settings: ViewSettings,
@@ -336,6 +338,7 @@ impl ExplorerApp {
             tape,
             history: History::default(),
             gesture: None,
+            presses: 0,
             edit_label: String::new(),
             camera,
             settings: ViewSettings {
@@ -543,17 +546,22 @@ impl ExplorerApp {
     /// Keeps an edit made by the panels this frame (or refuses it), recording one undo step
     /// per gesture.
     fn commit(&mut self, ctx: &egui::Context, before: Scene) {
-        // A gesture is one press of the pointer (a slider jumps to the press on its first
-        // frame, before egui calls it a drag, and the drag goes on under another id), or the
-        // keyboard's edits of one focused field.
-        let press = ctx.input(|i| {
-            i.pointer
-                .any_down()
-                .then(|| i.pointer.press_origin())
-                .flatten()
+        // A gesture is one press of the pointer on one parameter (a slider jumps to the press
+        // on its first frame, before egui calls it a drag, and frames may carry the press and
+        // the first moves together), or the keyboard's edits of one field: edits with the
+        // same description within one press, or one focus, are one undo step.
+        let (pressed, pointer) = ctx.input(|i| {
+            (
+                i.pointer.any_pressed(),
+                i.pointer.any_down() || i.pointer.any_released(),
+            )
         });
+        if pressed {
+            self.presses += 1;
+        }
+        let label = std::mem::take(&mut self.edit_label);
         if self.scene == before {
-            if press.is_none() {
+            if !pointer {
                 self.gesture = None;
             }
             return;
@@ -563,19 +571,23 @@ impl ExplorerApp {
             self.scene = before;
             return;
         }
-        let gesture = press
-            .map(|p| egui::Id::unique(("press", p.x.to_bits(), p.y.to_bits())))
-            .or_else(|| ctx.dragged_id())
-            .or_else(|| ctx.memory(|m| m.focused()));
-        if gesture.is_none() || gesture != self.gesture {
-            let label = if self.edit_label.is_empty() {
-                "edit".to_string()
+        let label = if label.is_empty() {
+            "edit".to_string()
+        } else {
+            label
+        };
+        let gesture = Gesture {
+            by: if pointer {
+                GestureBy::Press(self.presses)
             } else {
-                std::mem::take(&mut self.edit_label)
-            };
+                GestureBy::Focus(ctx.memory(|m| m.focused()))
+            },
+            label: label.clone(),
+        };
+        if self.gesture.as_ref() != Some(&gesture) {
             self.history.record(label, before);
         }
-        self.gesture = gesture;
+        self.gesture = Some(gesture);
         self.scene_changed();
     }
 
@@ -1769,6 +1781,20 @@ impl ExplorerApp {
     pub fn script_error(&self) -> Option<&str> {
         self.script.failed.as_deref()
     }
+}
+
+/// What makes edits one undo step: the same description, within one press of the pointer or
+/// one focus of the keyboard.
+#[derive(Clone, Debug, PartialEq)]
+struct Gesture {
+    by: GestureBy,
+    label: String,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum GestureBy {
+    Press(u64),
+    Focus(Option<egui::Id>),
 }
 
 /// What the unsaved-changes dialog was answered.

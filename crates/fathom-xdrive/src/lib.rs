@@ -114,7 +114,17 @@ impl Display {
     /// it accepts clients.
     pub fn start(width: u32, height: u32) -> Result<Display, XError> {
         let mut xvfb = Command::new("Xvfb")
-            .args(["-displayfd", "1", "-nolisten", "tcp", "-screen", "0"])
+            // -noreset: by default an X server resets when its last client leaves, and a
+            // client connecting during the reset (the window, just after a probe) is refused.
+            .args([
+                "-displayfd",
+                "1",
+                "-noreset",
+                "-nolisten",
+                "tcp",
+                "-screen",
+                "0",
+            ])
             .arg(format!("{width}x{height}x24"))
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
