@@ -20,13 +20,14 @@ use crate::frustum::{Seed, StartPath, TileStack, TileStart, cast_at, tile_start,
 use crate::generate::{
     Children, Origin, Outcome, Probe, Shader, View, apply, eval_children, init_root,
 };
+use crate::geometry::{BoxU, Ray, dim_at};
 use crate::node::{NONE, REQUESTED, pack_rgb};
-use crate::octree::{Anchor, BoxU, Octree, dim_at};
+use crate::octree::{Anchor, Octree};
 use crate::ray_grid::{RayGrid, RaySpan, SPAN};
 use crate::request_order::{DEFAULT_FOVEA, Fovea, RequestQueue};
 use crate::root::RootSpec;
 use crate::smooth::{self, Smoother};
-use crate::traverse::{Hit, Ray, Request, cast_kdrestart, cast_neighbour};
+use crate::traverse::{Hit, Request, cast_kdrestart, cast_neighbour};
 use fathom_core::dd::Dd;
 use fathom_core::scene::Scene;
 use fathom_core::{Camera, CameraFrame};

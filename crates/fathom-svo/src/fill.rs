@@ -29,8 +29,8 @@
 //!
 //! [`ExplorerConfig::fill_px`]: crate::explorer::ExplorerConfig::fill_px
 
+use crate::geometry::dim_at;
 use crate::node::NONE;
-use crate::octree::dim_at;
 use crate::traverse::Hit;
 
 /// Default [`crate::explorer::ExplorerConfig::fill_px`]: pixels between lattice rays (two

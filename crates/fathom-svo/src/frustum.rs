@@ -46,8 +46,9 @@
 //! zoom it saves steps but not time (docs/svo.md), so by default tiles are not refined.
 
 use crate::evict::mark_visited;
-use crate::octree::{BoxU, Octree};
-use crate::traverse::{Hit, Ray, Request, walk_from};
+use crate::geometry::{BoxU, Ray};
+use crate::octree::Octree;
+use crate::traverse::{Hit, Request, walk_from};
 
 /// Relative slack taken off the bound: far above the few ulps by which a ray's computed
 /// distance or a pixel's direction can differ from the exact one.

@@ -27,8 +27,9 @@
 //! after being drawn as a cube in front of the surface and walked through by rays.
 
 use crate::evict::{free_children, mark_visited};
+use crate::geometry::BoxU;
 use crate::node::{EMPTY, NONE, REQUESTED, VISITED, pack_rgb};
-use crate::octree::{BoxU, Octree};
+use crate::octree::Octree;
 use crate::plane::SurfacePlane;
 use fathom_core::dd::Dd;
 use fathom_core::dd4::Dd4;

@@ -4,6 +4,8 @@
 //! skip node, brick-based not-recently-used unification) with the frame phased so that no frame
 //! ever sees a half-updated octree. See `docs/svo.md` for the design.
 //!
+//! - [`geometry`]: boxes (exact lattice cells, f64 boxes near the eye), rays, a ray's entry
+//!   into and exit from a box (a leaf module the others share);
 //! - [`node`]: the arena node (48 bytes) and its flags;
 //! - [`plane`]: the surface plane a full leaf wider than a pixel is drawn with;
 //! - [`octree`]: the arena of nodes, free list of child blocks, exact lattice cells, boxes
@@ -34,6 +36,7 @@ pub mod explorer;
 pub mod fill;
 pub mod frustum;
 pub mod generate;
+pub mod geometry;
 pub mod node;
 pub mod octree;
 pub mod outline;

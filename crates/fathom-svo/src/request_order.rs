@@ -180,7 +180,7 @@ fn total_order(x: f64) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::octree::BoxU;
+    use crate::geometry::BoxU;
 
     fn ids(r: Vec<Request>) -> Vec<u32> {
         r.iter().map(|q| q.id).collect()
