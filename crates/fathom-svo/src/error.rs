@@ -1,8 +1,8 @@
-//! What can go wrong setting up an octree explorer, each naming the setting and its range.
+//! What can go wrong setting up an octree view, each naming the setting and its range.
 
 use fathom_core::tape::CompileError;
 
-/// Why an explorer could not be built.
+/// Why an octree view could not be built.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum OctreeError {
     #[error("image size {width}x{height} is out of range (1..=16384 per side)")]

@@ -47,7 +47,7 @@ pub const DEFAULT_MARGIN: f64 = 0.01;
 
 /// Where the voxels being coloured are seen from: the eye (world units relative to the
 /// shader's [`Origin`]) and the view's scale (the distance from the eye to the camera's target,
-/// which sets the reach of ambient occlusion as in the sphere tracer). Set by the explorer
+/// which sets the reach of ambient occlusion as in the sphere tracer). Set by the octree view
 /// before each frame's subdivision.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {

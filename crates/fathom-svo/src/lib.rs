@@ -21,7 +21,7 @@
 //! - [`ray_grid`]: the pixel rays of a frame, set up a run of pixels at a time;
 //! - [`request_order`]: which requested leaves a frame splits first (largest on screen,
 //!   nearer the centre counted larger);
-//! - [`explorer`]: one frame = render (read-only) -> subdivide -> unify; stats;
+//! - [`octree_view`]: one frame = render (read-only) -> subdivide -> unify; stats;
 //! - [`precision`]: the guard that stops a zoom where the octree's arithmetic runs out
 //!   (depth 98, zoom ~1e28 at 640x480);
 //! - [`stats`]: summaries of per-frame stats.
@@ -32,13 +32,13 @@
 pub mod check;
 pub mod error;
 pub mod evict;
-pub mod explorer;
 pub mod fill;
 pub mod frustum;
 pub mod generate;
 pub mod geometry;
 pub mod node;
 pub mod octree;
+pub mod octree_view;
 pub mod outline;
 pub mod plane;
 pub mod precision;
@@ -50,8 +50,8 @@ pub mod stats;
 pub mod traverse;
 
 pub use error::OctreeError;
-pub use explorer::{DeepEye, Explorer, ExplorerConfig, FrameStats, SvoImage, Traversal};
 pub use octree::Octree;
+pub use octree_view::{DeepEye, FrameStats, OctreeView, OctreeViewConfig, SvoImage, Traversal};
 pub use root::{MENGER_CUBE, RootSpec};
 
 #[cfg(test)]

@@ -37,8 +37,8 @@ pub const MAX_ANCHOR_DEPTH: u8 = 50;
 pub const ANCHOR_SPAN: u8 = 48;
 
 /// The lattice point box corners are measured from: `cell * 2^-depth` in root units (it may
-/// lie outside the root, as the Menger zoom's eye does). The explorer moves it with the eye
-/// (`Explorer::render`); with `depth` 0 and `cell` 0 local coordinates are root units.
+/// lie outside the root, as the Menger zoom's eye does). The octree view moves it with the eye
+/// (`OctreeView::render`); with `depth` 0 and `cell` 0 local coordinates are root units.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Anchor {
     /// Depth of the anchor's lattice, at most [`MAX_ANCHOR_DEPTH`].

@@ -1,4 +1,4 @@
-//! The explorer: one octree, one scene, one camera, advanced a frame at a time.
+//! The octree view: one octree, one scene, one camera, advanced a frame at a time.
 //!
 //! A frame has three phases, so no frame ever sees a half-updated octree (no torn frames by
 //! construction) while both cores stay busy in each phase:
@@ -46,9 +46,9 @@ pub enum Traversal {
     KdRestart,
 }
 
-/// Settings of an explorer. [`ExplorerConfig::validate`] gives the user-facing errors.
+/// Settings of an octree view. [`OctreeViewConfig::validate`] gives the user-facing errors.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ExplorerConfig {
+pub struct OctreeViewConfig {
     /// Image width in pixels.
     pub width: u32,
     /// Image height in pixels.
@@ -73,7 +73,7 @@ pub struct ExplorerConfig {
     pub subdivide_ms: f64,
     /// Frame rate to hold, or 0 for none: above 0, a frame's subdivision takes no more than
     /// what its render left of the frame time `1000 / target_fps` ms, between half and all of
-    /// `subdivide_ms` ([`ExplorerConfig::subdivide_budget`]), [0, 1000].
+    /// `subdivide_ms` ([`OctreeViewConfig::subdivide_budget`]), [0, 1000].
     pub target_fps: f64,
     /// Subdivisions done each frame whatever the time, counted in f64 evaluations' worth: on
     /// deep frames (double-double evaluation) a subdivision counts [`DEEP_COST`] times.
@@ -109,9 +109,9 @@ pub struct ExplorerConfig {
     pub fill_px: f64,
 }
 
-impl Default for ExplorerConfig {
+impl Default for OctreeViewConfig {
     fn default() -> Self {
-        ExplorerConfig {
+        OctreeViewConfig {
             width: 640,
             height: 480,
             fidelity: 1.0,
@@ -140,7 +140,7 @@ impl Default for ExplorerConfig {
     }
 }
 
-impl ExplorerConfig {
+impl OctreeViewConfig {
     /// Checks every setting, with errors that name the option.
     pub fn validate(&self) -> Result<(), OctreeError> {
         let (width, height) = (self.width, self.height);
@@ -187,7 +187,7 @@ impl ExplorerConfig {
     }
 
     /// The subdivision time of a frame whose render took `render_ms`: `subdivide_ms`, or with
-    /// a [`ExplorerConfig::target_fps`] what the render left of the frame time, clamped to
+    /// a [`OctreeViewConfig::target_fps`] what the render left of the frame time, clamped to
     /// `[subdivide_ms / 2, subdivide_ms]`: a slow render still refines, and a fast one does
     /// not spend the spare time refining (giving it up to twice `subdivide_ms` made the
     /// Menger zoom's next frames slower to render, its 10th-percentile frame rate 30 to 22).
@@ -341,14 +341,15 @@ impl DeepEye {
     }
 }
 
-/// The scale-adaptive SVO explorer.
-pub struct Explorer {
+/// The scale-adaptive sparse voxel octree of one scene, advanced a frame at a time as a
+/// camera moves: the tree, its shader, and what one frame keeps for the next.
+pub struct OctreeView {
     /// The octree (public for checks and tools; mutate only between frames).
     pub tree: Octree,
     /// Tape and shading.
     pub shader: Shader,
     /// Settings.
-    pub cfg: ExplorerConfig,
+    pub cfg: OctreeViewConfig,
     sky: ([f64; 3], [f64; 3]),
     pool: rayon::ThreadPool,
     skip: Option<(u32, BoxU)>,
@@ -378,7 +379,7 @@ pub struct Explorer {
 /// a frame (2.4 s of system time in a 1000-frame zoom's 36 s).
 #[derive(Default)]
 struct FrameBuffers {
-    /// Colour and depth of a returned image handed back by [`Explorer::recycle`].
+    /// Colour and depth of a returned image handed back by [`OctreeView::recycle`].
     image: Option<(Vec<u32>, Vec<f32>)>,
     /// Each pixel's smoothing half-width.
     half: Vec<u8>,
@@ -393,9 +394,9 @@ fn zeroed<T: Copy + Default>(mut v: Vec<T>, n: usize) -> Vec<T> {
     v
 }
 
-impl Explorer {
-    /// An explorer of `scene` with one root voxel.
-    pub fn new(scene: &Scene, cfg: ExplorerConfig) -> Result<Explorer, OctreeError> {
+impl OctreeView {
+    /// An octree view of `scene` with one root voxel.
+    pub fn new(scene: &Scene, cfg: OctreeViewConfig) -> Result<OctreeView, OctreeError> {
         cfg.validate()?;
         let shader = Shader::new(scene, cfg.margin)?;
         let max_nodes = cfg.max_memory / std::mem::size_of::<crate::node::Node>();
@@ -418,7 +419,7 @@ impl Explorer {
             deep: false,
         };
         init_root(&mut tree, &shader);
-        Ok(Explorer {
+        Ok(OctreeView {
             tree,
             shader,
             sky: (scene.render.sky_bottom, scene.render.sky_top),
@@ -573,7 +574,7 @@ impl Explorer {
         self.render_deep(cam, &DeepEye::of(cam))
     }
 
-    /// [`Explorer::render`] for an eye known more precisely than f64 (see [`DeepEye`]).
+    /// [`OctreeView::render`] for an eye known more precisely than f64 (see [`DeepEye`]).
     pub fn render_deep(
         &mut self,
         cam: &Camera,
@@ -591,7 +592,7 @@ impl Explorer {
         }
     }
 
-    /// [`Explorer::render_deep`] for a caller that needs only the requests and counts (the
+    /// [`OctreeView::render_deep`] for a caller that needs only the requests and counts (the
     /// settling loops): the image is dropped, so it is not drawn smooth.
     pub fn probe_deep(&mut self, cam: &Camera, deep: &DeepEye) -> (Vec<Request>, [u64; 3]) {
         let ((img, reqs, counts), _) = self.render_frame(cam, deep, Drawing::Probe, false);
@@ -599,14 +600,14 @@ impl Explorer {
         (reqs, counts)
     }
 
-    /// Hands an image this explorer rendered back, so the next render fills its buffers
+    /// Hands an image this view rendered back, so the next render fills its buffers
     /// instead of new ones (optional: a caller done with each frame saves every render the
     /// allocation, see [`FrameBuffers`]).
     pub fn recycle(&mut self, img: SvoImage) {
         self.buffers.image = Some((img.colour, img.depth));
     }
 
-    /// [`Explorer::probe_deep`] for an f64 eye.
+    /// [`OctreeView::probe_deep`] for an f64 eye.
     pub fn probe(&mut self, cam: &Camera) -> (Vec<Request>, [u64; 3]) {
         self.probe_deep(cam, &DeepEye::of(cam))
     }
@@ -614,7 +615,7 @@ impl Explorer {
     /// One probe of a settling loop at a fixed camera (subdivisions alone between its
     /// probes, `settling` kept from one probe to the next): the first casts every pixel, each
     /// later one only the pixels whose voxel could still change ([`settling_wide`]). The
-    /// requests are the ones [`Explorer::probe_deep`] would find: subdivision splits only
+    /// requests are the ones [`OctreeView::probe_deep`] would find: subdivision splits only
     /// full leaves some ray asked for and only empties space (links and starts may change,
     /// the leaf a ray meets does not), so a pixel that missed misses again, and one that
     /// stopped on a voxel no ray could ask for stops on it again. With surface planes drawn
@@ -637,7 +638,7 @@ impl Explorer {
         settling.pixels.is_none() || self.cfg.planes
     }
 
-    /// [`Explorer::probe_settling`], giving way when `stop` returns true before one of its
+    /// [`OctreeView::probe_settling`], giving way when `stop` returns true before one of its
     /// slices of [`PROBE_SLICE`] pixels: `None`, its requests released and `settling` left
     /// without pixels (the next probe casts every pixel).
     pub fn probe_settling_until(
@@ -763,7 +764,7 @@ impl Explorer {
 
     /// The render, its wide voxels drawn as `drawing` says (a probe's image is not
     /// smoothed). When `marking`, it also returns the pixels not yet settled, for the next
-    /// [`Explorer::probe_settling`] (else an empty list).
+    /// [`OctreeView::probe_settling`] (else an empty list).
     fn render_frame(
         &mut self,
         cam: &Camera,
@@ -797,7 +798,7 @@ impl Explorer {
             Drawing::Blocky | Drawing::Probe => f64::INFINITY,
         };
         // A pixel is marked not yet settled when its voxel's side over its distance reaches
-        // this (for a settling loop's next probe, [`Explorer::probe_settling`]).
+        // this (for a settling loop's next probe, [`OctreeView::probe_settling`]).
         let unsettled = if marking {
             settling_wide(lod)
         } else {
@@ -1027,7 +1028,7 @@ impl Explorer {
         self.subdivide_until(reqs, budget_ms, &|| false)
     }
 
-    /// [`Explorer::subdivide`], stopping early at the first batch after `stop` returns true
+    /// [`OctreeView::subdivide`], stopping early at the first batch after `stop` returns true
     /// (a window's view moved on: a still view's long budget gives way within a batch).
     pub fn subdivide_until(
         &mut self,
@@ -1039,8 +1040,8 @@ impl Explorer {
         self.subdivide_within(reqs, budget_ms, floor, stop)
     }
 
-    /// [`Explorer::subdivide_until`] with `floor` for the subdivisions done whatever the
-    /// time ([`ExplorerConfig::min_subdivisions`]).
+    /// [`OctreeView::subdivide_until`] with `floor` for the subdivisions done whatever the
+    /// time ([`OctreeViewConfig::min_subdivisions`]).
     fn subdivide_within(
         &mut self,
         reqs: Vec<Request>,
@@ -1136,7 +1137,7 @@ impl Explorer {
     }
 
     /// Phase 3: unloads every brick not visited since the last unification; returns how
-    /// many. (A frame's own unification, [`Explorer::step`], keeps bricks until they have gone
+    /// many. (A frame's own unification, [`OctreeView::step`], keeps bricks until they have gone
     /// unvisited [`IDLE_UNIFICATIONS`] times, unless memory runs short.)
     pub fn unify(&mut self) -> usize {
         self.unify_idle(1)
@@ -1160,16 +1161,16 @@ impl Explorer {
         self.step_deep(cam, &DeepEye::of(cam))
     }
 
-    /// [`Explorer::step`] with an eye known more precisely than f64 (see [`DeepEye`]).
+    /// [`OctreeView::step`] with an eye known more precisely than f64 (see [`DeepEye`]).
     pub fn step_deep(&mut self, cam: &Camera, deep: &DeepEye) -> (SvoImage, FrameStats) {
         self.step_deep_until(cam, deep, false, &|| false)
     }
 
-    /// [`Explorer::step_deep`] whose subdivision stops early once `stop` returns true
-    /// ([`Explorer::subdivide_until`]); the frame is rendered whole either way. A `still`
+    /// [`OctreeView::step_deep`] whose subdivision stops early once `stop` returns true
+    /// ([`OctreeView::subdivide_until`]); the frame is rendered whole either way. A `still`
     /// step (a view that is not moving, the camera the same as the last step's) goes on
     /// settling within its budget once the render's requests are split: probes of the pixels
-    /// the render left unsettled ([`Explorer::probe_settling`]), and their splits, a level of
+    /// the render left unsettled ([`OctreeView::probe_settling`]), and their splits, a level of
     /// detail each, so a still view settles in fewer steps.
     pub fn step_deep_until(
         &mut self,
@@ -1298,7 +1299,7 @@ impl Explorer {
     }
 }
 
-/// Which pixels the next probe of a settling loop casts ([`Explorer::probe_settling`]). Keep
+/// Which pixels the next probe of a settling loop casts ([`OctreeView::probe_settling`]). Keep
 /// one per loop at one camera; a fresh one casts every pixel.
 #[derive(Clone, Debug, Default)]
 pub struct Settling {
@@ -1329,7 +1330,7 @@ fn settling_wide(lod: f64) -> f64 {
 const SETTLING_CHUNK: usize = 256;
 
 /// Pixels a settling probe casts between its checks of a stop
-/// ([`Explorer::probe_settling_until`]): a tenth of a 640x480 frame's rays.
+/// ([`OctreeView::probe_settling_until`]): a tenth of a 640x480 frame's rays.
 pub const PROBE_SLICE: usize = 1 << 15;
 
 /// How a frame is drawn: its wide voxels smoothed or as blocks, or only probed for the
@@ -1346,11 +1347,11 @@ enum Drawing {
 pub const IDLE_UNIFICATIONS: u8 = 4;
 
 /// What one subdivision on a deep frame (double-double evaluation) counts towards
-/// [`ExplorerConfig::min_subdivisions`]: `fathom bench eval` measures double-double evaluation
+/// [`OctreeViewConfig::min_subdivisions`]: `fathom bench eval` measures double-double evaluation
 /// at 3.9-6.5x f64 for the fractal presets (5.8 Menger, 5.5 Mandelbulb).
 pub const DEEP_COST: usize = 5;
 
-/// How many levels above the eye's scale the anchor sits (see `Explorer::place_anchor`): the
+/// How many levels above the eye's scale the anchor sits (see `OctreeView::place_anchor`): the
 /// voxels the eye needs lie about 10 levels below that scale at 640x480, so boxes near the eye
 /// reach about 46 levels below the anchor, within its exact span of 48
 /// ([`crate::octree::ANCHOR_SPAN`]). Until the eye's scale is 37 levels below the root the
@@ -1577,7 +1578,7 @@ fn refine_tile(
     n
 }
 
-/// Default subdivision time per frame ([`ExplorerConfig::subdivide_ms`]), in milliseconds.
+/// Default subdivision time per frame ([`OctreeViewConfig::subdivide_ms`]), in milliseconds.
 /// 12 until 2026-12-03, when the colouring's normal and occlusion samples began to be
 /// evaluated four f64 lanes at a time: at 8 ms the 300-frame zooms to 1e15 split about as
 /// many leaves a frame as they did at 12 (Menger 360-522 against 317-456, Mandelbulb 223-309
@@ -1602,13 +1603,13 @@ fn refine_tile(
 /// (Mandelbulb 25.4 fps, Menger 21.8).
 pub const DEFAULT_SUBDIVIDE_MS: f64 = 3.0;
 
-/// Default tile side of the start walks ([`ExplorerConfig::beam`]): with tiles of 16 the
+/// Default tile side of the start walks ([`OctreeViewConfig::beam`]): with tiles of 16 the
 /// Mandelbulb zoom's render took 180 ms over three checkpoint frames against 234 ms for the
 /// corner-ray beams it replaced, 8 and 32 about the same, 4 far more (one thread,
 /// `render_bench`, docs/svo.md).
 pub const DEFAULT_BEAM: u32 = 16;
 
-/// Default finest tile side ([`ExplorerConfig::beam_min`]): the tile itself. Quadrants of 8
+/// Default finest tile side ([`OctreeViewConfig::beam_min`]): the tile itself. Quadrants of 8
 /// walking again from the tile's start took the steps per ray from 9.4 to 7.9 in the same
 /// render time (the walks' own visits cost more than ray steps).
 pub const DEFAULT_BEAM_MIN: u32 = 16;
@@ -1757,9 +1758,9 @@ mod budget_tests {
     /// half and all of `subdivide_ms`; without one, always `subdivide_ms`.
     #[test]
     fn a_target_frame_rate_gives_subdivision_what_the_render_left() {
-        let mut c = ExplorerConfig {
+        let mut c = OctreeViewConfig {
             subdivide_ms: 8.0,
-            ..ExplorerConfig::default()
+            ..OctreeViewConfig::default()
         };
         assert_eq!(c.subdivide_budget(30.0), 8.0);
         c.target_fps = 30.0;
@@ -1783,14 +1784,14 @@ mod frame_buffers_tests {
     fn a_render_into_reused_buffers_draws_what_fresh_buffers_draw() {
         // Every pixel cast: from outside the root the second render goes without tiles to
         // compare their cost, and only tiled renders fill pixels.
-        let cfg = ExplorerConfig {
+        let cfg = OctreeViewConfig {
             width: 96,
             height: 72,
             threads: 2,
             fill_px: 0.0,
-            ..ExplorerConfig::default()
+            ..OctreeViewConfig::default()
         };
-        let mut ex = Explorer::new(&fathom_core::scenes::menger(8), cfg).unwrap();
+        let mut ex = OctreeView::new(&fathom_core::scenes::menger(8), cfg).unwrap();
         let cam = Camera {
             eye: DVec3::new(1.9, 1.7, 1.5),
             target: DVec3::new(0.6, 0.5, 0.4),
@@ -1799,7 +1800,7 @@ mod frame_buffers_tests {
         };
         // Few frames settled: voxels wide enough to be smoothed, so every buffer is used.
         ex.settle(&cam, 3);
-        let render = |ex: &mut Explorer| {
+        let render = |ex: &mut OctreeView| {
             let ((img, reqs, _), marked) =
                 ex.render_frame(&cam, &DeepEye::of(&cam), Drawing::Smooth, true);
             ex.release_requests(&reqs);
@@ -1836,14 +1837,14 @@ mod frame_buffers_tests {
 mod fill_tests {
     use super::*;
 
-    fn menger_explorer() -> (Explorer, Camera) {
-        let cfg = ExplorerConfig {
+    fn menger_view() -> (OctreeView, Camera) {
+        let cfg = OctreeViewConfig {
             width: 128,
             height: 96,
             threads: 2,
-            ..ExplorerConfig::default()
+            ..OctreeViewConfig::default()
         };
-        let ex = Explorer::new(&fathom_core::scenes::menger(8), cfg).unwrap();
+        let ex = OctreeView::new(&fathom_core::scenes::menger(8), cfg).unwrap();
         let cam = Camera {
             eye: DVec3::new(1.9, 1.7, 1.5),
             target: DVec3::new(0.6, 0.5, 0.4),
@@ -1856,7 +1857,7 @@ mod fill_tests {
     /// The frame drawn as `drawing` with `fill_px`, with tile starts or without (`tiled`),
     /// and the pixels filled without a ray.
     fn render(
-        ex: &mut Explorer,
+        ex: &mut OctreeView,
         cam: &Camera,
         drawing: Drawing,
         fill_px: f64,
@@ -1881,7 +1882,7 @@ mod fill_tests {
 
     #[test]
     fn filled_pixels_show_what_their_rays_would() {
-        let (mut ex, cam) = menger_explorer();
+        let (mut ex, cam) = menger_view();
         // Five frames settled: voxels up to ~10 pixels wide, most narrower than 4.
         ex.settle(&cam, 5);
         let n = 128 * 96;
@@ -1927,7 +1928,7 @@ mod fill_tests {
 
     #[test]
     fn a_settled_frame_casts_every_pixel() {
-        let (mut ex, cam) = menger_explorer();
+        let (mut ex, cam) = menger_view();
         ex.settle(&cam, 400);
         for tiled in [true, false] {
             let (cast, _) = render(&mut ex, &cam, Drawing::Smooth, 0.0, tiled);
