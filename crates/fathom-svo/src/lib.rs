@@ -12,6 +12,8 @@
 //!   relative to the anchor near the eye, counts;
 //! - [`root`]: the root cube, fitted to the scene's bounds or given;
 //! - [`generate`]: the conservative full test, subdivision and recombination;
+//! - [`shader`]: the compiled scene evaluated near the anchor (f64 or double-double, four
+//!   points at once), a voxel's colour and surface plane, its line of sight;
 //! - [`traverse`]: neighbour traversal with skip node and link optimisation, kd-restart;
 //! - [`frustum`]: where a pixel tile's rays can start, from a walk of the nodes its frustum
 //!   meets;
@@ -45,6 +47,7 @@ pub mod precision;
 pub mod ray_grid;
 pub mod request_order;
 pub mod root;
+pub mod shader;
 pub mod smooth;
 pub mod stats;
 pub mod traverse;

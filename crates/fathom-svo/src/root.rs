@@ -10,7 +10,7 @@
 //! surface (and the solid), padded by up to one cell of the search grid. When an exact
 //! bounding cube is known (the Menger sponge), [`RootSpec::Cube`] gives it.
 
-use crate::generate::{Probe, Shader};
+use crate::shader::{Probe, Shader};
 use glam::DVec3;
 use rayon::prelude::*;
 

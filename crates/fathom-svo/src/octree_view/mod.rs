@@ -40,10 +40,11 @@ pub use subdivide::DEEP_COST;
 pub use unify::IDLE_UNIFICATIONS;
 
 use crate::error::OctreeError;
-use crate::generate::{Origin, Shader, init_root};
+use crate::generate::init_root;
 use crate::geometry::BoxU;
 use crate::octree::Octree;
 use crate::request_order::Fovea;
+use crate::shader::{Origin, Shader};
 use crate::smooth::Smoother;
 use fathom_core::scene::Scene;
 use glam::DVec3;

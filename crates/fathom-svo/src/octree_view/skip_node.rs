@@ -3,9 +3,10 @@
 //! the eye sits inside a coarse full voxel.
 
 use super::OctreeView;
-use crate::generate::{Outcome, Probe, apply, eval_children};
+use crate::generate::{Outcome, apply, eval_children};
 use crate::geometry::BoxU;
 use crate::node::NONE;
+use crate::shader::Probe;
 
 impl OctreeView {
     /// The current skip node and its box.

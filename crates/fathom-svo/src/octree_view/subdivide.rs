@@ -3,9 +3,10 @@
 //! in parallel and linked in on one thread.
 
 use super::OctreeView;
-use crate::generate::{Children, Outcome, Probe, apply, eval_children};
+use crate::generate::{Children, Outcome, apply, eval_children};
 use crate::node::REQUESTED;
 use crate::request_order::RequestQueue;
+use crate::shader::Probe;
 use crate::traverse::Request;
 use rayon::prelude::*;
 use std::time::Instant;
