@@ -340,7 +340,7 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
     // voxels whose centre is outside must still be full when a corner is inside, and rays at
     // voxel edges must not bounce between two leaves. No pixel may lie behind the careful
     // tracer's surface by more than 2 % (a hole: before the corner test, rays hit structure
-    // 100x further away). Since the estimate is first-order at the surface (2026-12-04) the
+    // 100x further away). Now that the estimate is first-order at the surface the
     // centre test finds it too, and as everywhere on the Mandelbulb the estimate's
     // conservative margin (0.13-2.3x the distance on most lines, fathom-core's fractal
     // tests) puts the octree's surface up to a few voxels in front: measured 1.0-5.3 % of the
@@ -409,16 +409,16 @@ fn render_beam(ex: &mut OctreeView, cam: &Camera, (beam, beam_min): (u32, u32)) 
 }
 
 #[test]
-fn beam_start_gives_the_images_of_the_skip_node_start() {
-    // Settled views: the Mandelbulb zoom at three depths (the first with the eye outside the
-    // root), at the default LOD and at a coarse one (fidelity 4: implicit LOD stops rays on
-    // inner nodes four pixels wide, so the beams' LOD test is what stops them), and the Menger
-    // sponge's central tunnel. Single-level tiles of 16 (the default), 8 and 3 (partial tiles
-    // at the image's right and bottom edges), and refined tiles: 8 down to 4 and to 2, 16 to 8,
-    // and 12 to 3 (quadrants cut at odd sides and at the image's edges). Each must give exactly
-    // the image of rays started at the skip node, and tiles of 8 or more must save steps (else
-    // the test would prove nothing; smaller tiles' walks cost more visits than they save
-    // steps); refining 8 to 4 must start the rays deeper.
+fn tile_starts_give_the_images_of_rays_from_the_skip_node() {
+    // Tile starts ("beams" below, their first name). Settled views: the Mandelbulb zoom at three
+    // depths (the first with the eye outside the root), at the default LOD and at a coarse one
+    // (fidelity 4: implicit LOD stops rays on inner nodes four pixels wide, so the beams' LOD
+    // test is what stops them), and the Menger sponge's central tunnel. Single-level tiles of 16
+    // (the default), 8 and 3 (partial tiles at the image's right and bottom edges), and refined
+    // tiles: 8 down to 4 and to 2, 16 to 8, and 12 to 3 (quadrants cut at odd sides and at the
+    // image's edges). Each must give exactly the image of rays started at the skip node, and
+    // tiles of 8 or more must save steps (else the test would prove nothing; smaller tiles' walks
+    // cost more visits than they save steps); refining 8 to 4 must start the rays deeper.
     let p = path_preset("mandelbulb").unwrap();
     let mut views = Vec::new();
     // Frame 3 of the zoom sees the bulb from outside the root: the walks start at the root.
