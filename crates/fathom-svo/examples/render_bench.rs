@@ -7,10 +7,10 @@
 //! [smooth: 1 or 0] [fill_px, or several comma-separated] [subdivisions a frame]`
 //!
 //! The fovea (default `request_order::DEFAULT_FOVEA`) decides which leaves the fixed number of
-//! subdivisions splits: 0 builds the trees of the builds before stop 37, whose checksums
-//! `docs/svo.md` records. Smoothing (default on, as in every front end; `crate::smooth`)
+//! subdivisions splits: 0 builds the trees of the builds without a fovea, whose checksums
+//! `docs/log/svo.md` records. Smoothing (default on, as in every front end; `crate::smooth`)
 //! changes the checksummed colours wherever a frame shows voxels two or more pixels wide: 0
-//! gives the checksums of the builds before stop 38.
+//! gives the checksums of the builds before smoothing.
 //!
 //! Pixel filling (`crate::fill`, default `fill::DEFAULT_FILL_PX`): with several values (e.g.
 //! `0,4`) each checkpoint's repeated renders take them in turn on the same frozen tree, and

@@ -42,8 +42,8 @@
 //!
 //! **Refinement.** A quadrant of a tile can walk again from its parent's start ([`Seed::within`]):
 //! its rays are some of the parent's, the nodes wholly before the parent's start are skipped
-//! (the parent's walk saw them), and its bound is usually deeper. Measured on the Mandelbulb
-//! zoom it saves steps but not time (docs/svo.md), so by default tiles are not refined.
+//! (the parent's walk saw them), and its bound is usually deeper. It saves ray steps but not
+//! render time (`docs/log/svo.md`), so by default tiles are not refined.
 
 use crate::evict::mark_visited;
 use crate::geometry::{BoxU, Ray};
@@ -425,11 +425,8 @@ const RETRIES: [f64; 2] = [1.0 - 1.0 / 1024.0, 1.0 - 1.0 / 32.0];
 /// distance, and at the [`RETRIES`], is within the margin of a face of its leaf (or outside
 /// `s`), so the caller must start it at the skip node.
 ///
-/// Inlined into the render loop, the 1000-frame Mandelbulb zoom renders 1-9 % faster (by blocks
-/// of 200 frames; 4-5 % more frames a second). Called, the pixel's ray was built on the stack
-/// one component at a time and read back two at a time by the start point's arithmetic,
-/// likely a store-forwarding stall on every ray: the multiply right after that load took 4 %
-/// of this function's samples.
+/// Inlined into the render loop: called, the pixel's ray was built on the stack one component
+/// at a time and read back two at a time, a store-forwarding stall on every ray.
 #[inline(always)]
 pub fn cast_at(
     tree: &Octree,

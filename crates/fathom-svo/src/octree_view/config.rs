@@ -61,7 +61,7 @@ pub struct OctreeViewConfig {
     /// Draw full leaves wider than a pixel with their surface planes ([`crate::plane`])
     /// instead of as cubes: a zoom's frames show surfaces instead of staircases while detail
     /// arrives, at the cost of the steps rays take through the leaves whose planes they pass
-    /// (`docs/svo.md`, "Surface planes").
+    /// (`docs/log/svo.md`, "Surface planes").
     pub planes: bool,
     /// How much nearer the screen's centre a subdivision request counts: its size on screen
     /// is divided by `1 + fovea rho^2`, `rho` its distance from the centre in half-heights
@@ -158,8 +158,7 @@ impl OctreeViewConfig {
     /// The subdivision time of a frame whose render took `render_ms`: `subdivide_ms`, or with
     /// a [`OctreeViewConfig::target_fps`] what the render left of the frame time, clamped to
     /// `[subdivide_ms / 2, subdivide_ms]`: a slow render still refines, and a fast one does
-    /// not spend the spare time refining (giving it up to twice `subdivide_ms` made the
-    /// Menger zoom's next frames slower to render, its 10th-percentile frame rate 30 to 22).
+    /// not spend the spare time refining (a finer tree makes the next frames slower to render).
     pub fn subdivide_budget(&self, render_ms: f64) -> f64 {
         if self.target_fps > 0.0 {
             (1e3 / self.target_fps - render_ms).clamp(0.5 * self.subdivide_ms, self.subdivide_ms)
@@ -169,40 +168,18 @@ impl OctreeViewConfig {
     }
 }
 
-/// Default subdivision time per frame ([`OctreeViewConfig::subdivide_ms`]), in milliseconds.
-/// 12 until 2026-12-03, when the colouring's normal and occlusion samples began to be
-/// evaluated four f64 lanes at a time: at 8 ms the 300-frame zooms to 1e15 split about as
-/// many leaves a frame as they did at 12 (Menger 360-522 against 317-456, Mandelbulb 223-309
-/// against 231-289, five interleaved pairs) and the saving goes to the frame rate. 8 until
-/// 2026-12-05, when the full children's line-of-sight traces began to run four lanes at a
-/// time: at 7 ms the 1000-frame Mandelbulb zoom splits 270-276 leaves a frame, as it did at
-/// 8 (`--subdivide-ms 8` now splits 315-317, for an image similarity within 0.01 of 7's). 7
-/// until 2026-12-05 (stop 36), when a wide full child whose line of sight passes it began to
-/// be tested one level down before its line is traced on: at 6 ms the 1000-frame Mandelbulb
-/// zoom splits 312-341 leaves a frame, as it did at 7 (308-346), for 0.5-1.2 more frames a
-/// second (three interleaved pairs); kept at 7, the finer tree rendered 0.8-3.0 fps slower
-/// in four of five pairs. The Menger's splits cost what they did, so it splits a sixth fewer
-/// (641-678 against 769-796 on a 400-frame zoom to 1e6, SSIM 0.00-0.03 lower). 6 until
-/// 2026-12-06 (stop 37), when requests began to be served nearer the screen's centre first
-/// ([`crate::request_order::Fovea`]) and no longer all sorted: at 3 ms with the fovea the
-/// 400-frame zooms to 1e6 come closer to the sphere tracer than at 6 ms without (median SSIM
-/// at frames 40-360: Mandelbulb 0.217 against 0.188, Menger 0.350 against 0.284) at a frame
-/// rate as high (27.9 against 25.2, 32.9 against 27.0); on the 1000-frame zooms to 1e15 the
-/// frame rates were within the machine's noise (four interleaved pairs each: Mandelbulb
-/// 34.5, 30.6, 30.0, 33.5 against 31.6, 31.0, 31.4, 30.9; Menger 33.9, 30.5, 33.5, 33.4
-/// against 34.6, 35.1, 32.3, 31.9). Kept at 6 ms, the fovea's finer centre rendered slower
-/// (Mandelbulb 25.4 fps, Menger 21.8).
+/// Default subdivision time per frame ([`OctreeViewConfig::subdivide_ms`]), in milliseconds:
+/// with the requests served nearer the screen's centre first ([`crate::request_order::Fovea`])
+/// it refines the view as well as more time did, and leaves the frame rate to the render
+/// (how it came down from 12 ms: `docs/log/svo.md`).
 pub const DEFAULT_SUBDIVIDE_MS: f64 = 3.0;
 
-/// Default tile side of the start walks ([`OctreeViewConfig::beam`]): with tiles of 16 the
-/// Mandelbulb zoom's render took 180 ms over three checkpoint frames against 234 ms for the
-/// corner-ray beams it replaced, 8 and 32 about the same, 4 far more (one thread,
-/// `render_bench`, docs/svo.md).
+/// Default tile side of the start walks ([`OctreeViewConfig::beam`]): the fastest render of the
+/// sides tried (4 to 32; `docs/log/svo.md`).
 pub const DEFAULT_BEAM: u32 = 16;
 
-/// Default finest tile side ([`OctreeViewConfig::beam_min`]): the tile itself. Quadrants of 8
-/// walking again from the tile's start took the steps per ray from 9.4 to 7.9 in the same
-/// render time (the walks' own visits cost more than ray steps).
+/// Default finest tile side ([`OctreeViewConfig::beam_min`]): the tile itself, not refined:
+/// quadrants walking again save ray steps but not render time (their walks' visits cost more).
 pub const DEFAULT_BEAM_MIN: u32 = 16;
 
 #[cfg(test)]

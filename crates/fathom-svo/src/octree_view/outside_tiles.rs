@@ -4,21 +4,17 @@
 /// Renders without tile starts after a render with the eye outside the root in which tiles
 /// cost more steps a ray than the last render without them ([`OutsideTiles`]). From outside,
 /// a tile's rays only start inside the root: where stops lie at the root's faces (the Menger
-/// zoom looks into the root's corner, whose faces are the sponge's) their start points
-/// straddle the faces and most rays fall back, the walks wasted (4 % of the render); the
-/// Mandelbulb's first frames, seen from outside, take 15-23 steps a ray without them and 13
-/// or fewer with them. Until 2026-12-05 the pause followed any frame in which most rays fell
-/// back, which paused the Mandelbulb's first 16 frames too: most of its fallbacks are sky.
+/// zoom looks into the root's corner, whose faces are the sponge's) most rays fall back to the
+/// skip node and the walks are wasted, while the Mandelbulb's first frames gain from them.
 pub const OUTSIDE_TILES_PAUSE: u64 = 16;
 
 /// The choice, while the eye is outside the root, between tile starts and none, by the steps
 /// a ray took in recent renders of each kind. A render with tiles is compared with the last
 /// one without: costlier, and tiles pause for [`OUTSIDE_TILES_PAUSE`] renders; with no
 /// comparison from the last `4 * OUTSIDE_TILES_PAUSE` renders, the next render goes without
-/// tiles to measure one, and tiles pause if it was the cheaper. (That measuring render costs:
-/// the Mandelbulb's 34th frame took 87-110 ms without tiles against 40-57 with them, so the
-/// comparison is renewed rarely.) It counts renders with the eye outside, not frames: a warm
-/// start or a settle renders many times at one frame.
+/// tiles to measure one, and tiles pause if it was the cheaper. That measuring render can be
+/// twice as slow, so the comparison is renewed rarely. It counts renders with the eye outside,
+/// not frames: a warm start or a settle renders many times at one frame.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct OutsideTiles {
     /// Renders with the eye outside the root recorded so far (the index of the next). Those
