@@ -422,7 +422,7 @@ const RETRIES: [f64; 2] = [1.0 - 1.0 / 1024.0, 1.0 - 1.0 / 32.0];
 
 /// The neighbour traversal of pixel ray `r` from its tile's start `s`: the hit the ray's
 /// traversal from the eye finds, after fewer steps; `None` when its point at the start
-/// distance, and at the [`RETRIES`], is within the margin of a face of its leaf (or outside
+/// distance, and at the `RETRIES`, is within the margin of a face of its leaf (or outside
 /// `s`), so the caller must start it at the skip node.
 ///
 /// Inlined into the render loop: called, the pixel's ray was built on the stack one component

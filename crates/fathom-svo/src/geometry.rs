@@ -115,8 +115,9 @@ impl BoxU {
         }
     }
 
-    /// The box at depth `d <= self.depth` that contains this one, for lattices that have a
-    /// corner at local 0 (depths at or below the anchor's; [`Anchor::snap`] handles the rest).
+    /// The box at depth `d <= self.depth` that contains this one, for lattices that have a corner
+    /// at local 0 (depths at or below the anchor's; [`Anchor::snap`](crate::octree::Anchor::snap)
+    /// handles the rest).
     #[inline(always)]
     pub fn snapped(&self, d: u8) -> BoxU {
         let s = dim_at(d);

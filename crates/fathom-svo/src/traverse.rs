@@ -29,6 +29,7 @@ use crate::octree::Octree;
 /// consistent tree).
 pub const MAX_STEPS: u32 = 1 << 16;
 
+/// What a ray found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// Distance in root units where the ray stopped at the node (`f64::INFINITY` for a miss):

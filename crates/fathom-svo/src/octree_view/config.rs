@@ -44,8 +44,9 @@ pub struct OctreeViewConfig {
     /// what its render left of the frame time `1000 / target_fps` ms, between half and all of
     /// `subdivide_ms` ([`OctreeViewConfig::subdivide_budget`]), [0, 1000].
     pub target_fps: f64,
-    /// Subdivisions done each frame whatever the time, counted in f64 evaluations' worth: on
-    /// deep frames (double-double evaluation) a subdivision counts [`DEEP_COST`] times.
+    /// Subdivisions done each frame whatever the time, counted in f64 evaluations' worth: on deep
+    /// frames (double-double evaluation) a subdivision counts
+    /// [`DEEP_COST`](crate::octree_view::DEEP_COST) times.
     pub min_subdivisions: usize,
     /// The root cube: fitted to the scene (default) or explicit.
     pub root: RootSpec,
@@ -63,9 +64,10 @@ pub struct OctreeViewConfig {
     /// arrives, at the cost of the steps rays take through the leaves whose planes they pass
     /// (`docs/log/svo.md`, "Surface planes").
     pub planes: bool,
-    /// How much nearer the screen's centre a subdivision request counts: its size on screen
-    /// is divided by `1 + fovea rho^2`, `rho` its distance from the centre in half-heights
-    /// ([`Fovea`]; 0: the largest on screen first wherever they are), [0, 64].
+    /// How much nearer the screen's centre a subdivision request counts: its size on screen is
+    /// divided by `1 + fovea rho^2`, `rho` its distance from the centre in half-heights
+    /// ([`Fovea`](crate::request_order::Fovea); 0: the largest on screen first wherever they are),
+    /// [0, 64].
     pub fovea: f64,
     /// Draw voxels at least two pixels wide smooth: each such pixel takes the mean colour of
     /// a box as wide as its voxel on screen ([`crate::smooth`]), so a zoom's coarse frames

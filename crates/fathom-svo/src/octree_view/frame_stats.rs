@@ -47,7 +47,8 @@ pub struct FrameStats {
     /// Depth of the anchor box coordinates are measured from (0: root units, f64 evaluation;
     /// deeper: double-double evaluation).
     pub anchor_depth: u8,
-    /// The largest voxel visible in this frame, in pixels ([`SvoImage::largest_voxel_px`]).
+    /// The largest voxel visible in this frame, in pixels
+    /// ([`SvoImage::largest_voxel_px`](crate::SvoImage::largest_voxel_px)).
     pub largest_voxel_px: f64,
     /// The part of `nodes_per_ray` the tiles' start walks took (the nodes their frusta met,
     /// per ray of the image).

@@ -2,7 +2,7 @@
 //! took in recent renders with tiles and without.
 
 /// Renders without tile starts after a render with the eye outside the root in which tiles
-/// cost more steps a ray than the last render without them ([`OutsideTiles`]). From outside,
+/// cost more steps a ray than the last render without them (`OutsideTiles`). From outside,
 /// a tile's rays only start inside the root: where stops lie at the root's faces (the Menger
 /// zoom looks into the root's corner, whose faces are the sponge's) most rays fall back to the
 /// skip node and the walks are wasted, while the Mandelbulb's first frames gain from them.

@@ -28,7 +28,7 @@ impl OctreeView {
 
     /// One probe of a settling loop at a fixed camera (subdivisions alone between its
     /// probes, `settling` kept from one probe to the next): the first casts every pixel, each
-    /// later one only the pixels whose voxel could still change ([`settling_wide`]). The
+    /// later one only the pixels whose voxel could still change (`settling_wide`). The
     /// requests are the ones [`OctreeView::probe_deep`] would find: subdivision splits only
     /// full leaves some ray asked for and only empties space (links and starts may change,
     /// the leaf a ray meets does not), so a pixel that missed misses again, and one that

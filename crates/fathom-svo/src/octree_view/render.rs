@@ -51,7 +51,7 @@ impl OctreeView {
 
     /// Hands an image this view rendered back, so the next render fills its buffers
     /// instead of new ones (optional: a caller done with each frame saves every render the
-    /// allocation, see [`FrameBuffers`]).
+    /// allocation, see `FrameBuffers`).
     pub fn recycle(&mut self, img: SvoImage) {
         self.buffers.image = Some((img.colour, img.depth));
     }

@@ -1,8 +1,9 @@
 //! What a settling loop at a fixed camera keeps between its probes ([`Settling`]): the pixels
 //! whose voxel could still change, the only ones its next probe casts.
 
-/// Which pixels the next probe of a settling loop casts ([`OctreeView::probe_settling`]). Keep
-/// one per loop at one camera; a fresh one casts every pixel.
+/// Which pixels the next probe of a settling loop casts
+/// ([`OctreeView::probe_settling`](crate::OctreeView::probe_settling)). Keep one per loop at one
+/// camera; a fresh one casts every pixel.
 #[derive(Clone, Debug, Default)]
 pub struct Settling {
     /// The pixels (`y * width + x`) whose voxel was wider than their footprint at the last
@@ -32,5 +33,6 @@ pub(super) fn settling_wide(lod: f64) -> f64 {
 pub(super) const SETTLING_CHUNK: usize = 256;
 
 /// Pixels a settling probe casts between its checks of a stop
-/// ([`OctreeView::probe_settling_until`]): a tenth of a 640x480 frame's rays.
+/// ([`OctreeView::probe_settling_until`](crate::OctreeView::probe_settling_until)): a tenth of a
+/// 640x480 frame's rays.
 pub const PROBE_SLICE: usize = 1 << 15;

@@ -129,6 +129,7 @@ impl OctreeView {
 }
 
 /// What one subdivision on a deep frame (double-double evaluation) counts towards
-/// [`OctreeViewConfig::min_subdivisions`]: `fathom bench eval` measures double-double evaluation
-/// at 3.9-6.5x f64 for the fractal presets (5.8 Menger, 5.5 Mandelbulb).
+/// [`OctreeViewConfig::min_subdivisions`](crate::OctreeViewConfig::min_subdivisions): `fathom bench
+/// eval` measures double-double evaluation at 3.9-6.5x f64 for the fractal presets (5.8 Menger, 5.5
+/// Mandelbulb).
 pub const DEEP_COST: usize = 5;

@@ -1,7 +1,7 @@
 //! The compiled scene evaluated where the octree needs it: at points relative to the
 //! anchor ([`Origin`]), in f64 or double-double, one point or four at once, with the
-//! distance gradient. Colouring a voxel ([`shading`]) and finding the surface point its line
-//! of sight meets ([`sight`]) are its two submodules.
+//! distance gradient. Colouring a voxel ([`Shader::colour`], `shading.rs`) and finding the
+//! surface point its line of sight meets (`sight.rs`) are its two submodules.
 
 mod shading;
 mod sight;
