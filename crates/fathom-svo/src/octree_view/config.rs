@@ -185,7 +185,7 @@ pub const DEFAULT_BEAM: u32 = 16;
 pub const DEFAULT_BEAM_MIN: u32 = 16;
 
 #[cfg(test)]
-mod budget_tests {
+mod tests {
     use super::*;
 
     /// With a target frame rate, subdivision gets what the render left of the frame, within

@@ -12,6 +12,11 @@
 //!
 //! The skip node (the leaf containing the eye) is updated before rendering by following the
 //! neighbour link through the face the eye crossed, or one descent from the root.
+//!
+//! Files: the settings (`config`), the anchor and the deep eye (`anchor`), the skip node
+//! (`skip_node`), the render (`render`, with `pixels`, `tiles` and `outside_tiles`), the
+//! settling probes (`settling`, `probe`), subdivision (`subdivide`), unification (`unify`),
+//! the whole frame (`step`), and what a frame gives back (`image`, `frame_stats`).
 
 mod anchor;
 mod config;

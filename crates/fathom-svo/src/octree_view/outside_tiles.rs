@@ -63,7 +63,7 @@ impl OutsideTiles {
 }
 
 #[cfg(test)]
-mod outside_tiles_tests {
+mod tests {
     use super::*;
 
     /// Replays costs per render (`(tiled cost, untiled cost)`, whichever the choice asks
