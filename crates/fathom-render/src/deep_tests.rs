@@ -5,7 +5,7 @@
 use crate::zoom::ZoomPath;
 use fathom_core::Tape;
 use fathom_core::camera_path::path_preset;
-use fathom_svo::{DeepEye, Explorer, ExplorerConfig, RootSpec};
+use fathom_svo::{DeepEye, OctreeView, OctreeViewConfig, RootSpec};
 use fathom_trace::deep::{silhouette_iou, zoom_frame_depths};
 
 /// The octree's depths (None: sky) of the zoom's frame at `zoom`, settled.
@@ -18,14 +18,14 @@ fn octree_depths(p: &ZoomPath, zoom: f64, w: u32, h: u32) -> (Vec<Option<f64>>, 
         },
         _ => RootSpec::default(),
     };
-    let mut ex = Explorer::new(
+    let mut ex = OctreeView::new(
         &p.scene,
-        ExplorerConfig {
+        OctreeViewConfig {
             width: w,
             height: h,
             threads: 2,
             root,
-            ..ExplorerConfig::default()
+            ..OctreeViewConfig::default()
         },
     )
     .unwrap();

@@ -1,4 +1,4 @@
-//! The octree backend of a session: one explorer, kept while the scene and the octree settings
+//! The octree backend of a session: one octree view, kept while the scene and the octree settings
 //! stay the same (so a still view settles once and a zoom or a window steps the same tree),
 //! rebuilt when either changes; the per-frame time budgets (`subdivide_ms`, `target_fps`) and
 //! the order requests are served in (`fovea`) and whether wide voxels are drawn smooth are not
@@ -14,21 +14,21 @@ use crate::session::{Counters, Rendered, report_done};
 use crate::stats::{OctreeStats, Stats, Timings};
 use fathom_core::frame::{Frame, Rect};
 use fathom_core::{Camera, Scene};
-use fathom_svo::{Explorer, ExplorerConfig, FrameStats, OctreeError, SvoImage};
+use fathom_svo::{FrameStats, OctreeError, OctreeView, OctreeViewConfig, SvoImage};
 use fathom_trace::post::{self, PostParams};
 use std::time::Instant;
 
 pub(crate) struct OctreeBackend {
-    pub explorer: Explorer,
-    key: (u64, ExplorerConfig),
+    pub view: OctreeView,
+    key: (u64, OctreeViewConfig),
 }
 
 /// The settings that shape the tree: `cfg` with its per-frame time budgets, request order,
 /// smoothing and filling set to their defaults (they decide how much a frame refines, where
 /// first and how wide voxels are drawn, not what the tree settles to).
-fn tree_settings(cfg: &ExplorerConfig) -> ExplorerConfig {
-    let d = ExplorerConfig::default();
-    ExplorerConfig {
+fn tree_settings(cfg: &OctreeViewConfig) -> OctreeViewConfig {
+    let d = OctreeViewConfig::default();
+    OctreeViewConfig {
         subdivide_ms: d.subdivide_ms,
         target_fps: d.target_fps,
         fovea: d.fovea,
@@ -39,9 +39,9 @@ fn tree_settings(cfg: &ExplorerConfig) -> ExplorerConfig {
 }
 
 impl OctreeBackend {
-    /// The explorer for `scene` (of shading generation `generation`) and `req`'s settings,
+    /// The octree view for `scene` (of shading generation `generation`) and `req`'s settings,
     /// building a new one when either changed (other than the time budgets, the request
-    /// order's fovea and the smoothing, which are set on the explorer kept).
+    /// order's fovea and the smoothing, which are set on the view kept).
     pub fn get<'a>(
         slot: &'a mut Option<OctreeBackend>,
         scene: &Scene,
@@ -53,14 +53,14 @@ impl OctreeBackend {
         let key = (generation, tree_settings(&cfg));
         if slot.as_ref().is_none_or(|o| o.key != key) {
             *slot = None;
-            let explorer = Explorer::new(scene, cfg.clone())?;
+            let view = OctreeView::new(scene, cfg.clone())?;
             counters.octrees_built += 1;
-            *slot = Some(OctreeBackend { explorer, key });
+            *slot = Some(OctreeBackend { view, key });
         }
-        // The kept explorer's settings differ at most in the budgets, the fovea, the
+        // The kept view's settings differ at most in the budgets, the fovea, the
         // smoothing and the filling: take the new ones.
         let ob = slot.as_mut().expect("built above");
-        ob.explorer.cfg = cfg;
+        ob.view.cfg = cfg;
         Ok(ob)
     }
 
@@ -75,14 +75,14 @@ impl OctreeBackend {
         let t0 = Instant::now();
         let mut settle_frames = 0;
         let deep = fathom_svo::DeepEye::of(camera);
-        let mut settling = fathom_svo::explorer::Settling::default();
+        let mut settling = fathom_svo::octree_view::Settling::default();
         for _ in 0..req.octree.settle_frames {
             if control.cancelled() {
                 return Err(crate::RenderError::Cancelled);
             }
-            let (reqs, _) = self.explorer.probe_settling(camera, &deep, &mut settling);
+            let (reqs, _) = self.view.probe_settling(camera, &deep, &mut settling);
             // Progress: the pixels no longer on voxels wider than their footprint.
-            let cfg = &self.explorer.cfg;
+            let cfg = &self.view.cfg;
             let total = cfg.width as usize * cfg.height as usize;
             if let Some(pending) = settling.pending() {
                 control.report(total - pending.min(total), total);
@@ -90,17 +90,17 @@ impl OctreeBackend {
             if reqs.is_empty() {
                 break;
             }
-            self.explorer.subdivide(reqs, f64::INFINITY);
+            self.view.subdivide(reqs, f64::INFINITY);
             settle_frames += 1;
         }
         let ms_subdivide = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = Instant::now();
-        let (img, reqs, counts) = self.explorer.render(camera);
-        self.explorer.release_requests(&reqs);
+        let (img, reqs, counts) = self.view.render(camera);
+        self.view.release_requests(&reqs);
         let ms_render = t1.elapsed().as_secs_f64() * 1e3;
         let t2 = Instant::now();
         let frame = finish(&img, scene, camera, req);
-        let tree = &self.explorer.tree;
+        let tree = &self.view.tree;
         let c = tree.counts();
         let stats = Stats {
             renderer: "svo",
@@ -128,7 +128,7 @@ impl OctreeBackend {
     }
 
     /// One stepped frame (render the tree as it is, subdivide, maybe unify); a `still` one
-    /// settles on within its budget ([`fathom_svo::Explorer::step_deep_until`]).
+    /// settles on within its budget ([`fathom_svo::OctreeView::step_deep_until`]).
     #[allow(clippy::too_many_arguments)]
     pub fn step(
         &mut self,
@@ -141,10 +141,10 @@ impl OctreeBackend {
         control: &Control,
     ) -> (Option<Frame>, FrameStats) {
         let (img, st) = self
-            .explorer
+            .view
             .step_deep_until(camera, deep, still, &|| control.cancelled());
         let frame = want_frame.then(|| finish(&img, scene, camera, req));
-        self.explorer.recycle(img);
+        self.view.recycle(img);
         (frame, st)
     }
 }

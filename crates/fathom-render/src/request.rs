@@ -6,7 +6,7 @@
 use fathom_core::Projection;
 use fathom_core::camera_path::ExactCube;
 use fathom_core::frame::Rect;
-use fathom_svo::{ExplorerConfig, OctreeError, RootSpec, Traversal};
+use fathom_svo::{OctreeError, OctreeViewConfig, RootSpec, Traversal};
 use fathom_trace::{Method, Options, OptionsError};
 use serde::{Deserialize, Serialize};
 
@@ -105,11 +105,11 @@ impl Default for OctreeSettings {
             root: None,
             fit_half: 4.0,
             settle_frames: 400,
-            subdivide_ms: fathom_svo::explorer::DEFAULT_SUBDIVIDE_MS,
+            subdivide_ms: fathom_svo::octree_view::DEFAULT_SUBDIVIDE_MS,
             target_fps: 0.0,
             unify_every: 4,
-            beam: fathom_svo::explorer::DEFAULT_BEAM,
-            beam_min: fathom_svo::explorer::DEFAULT_BEAM_MIN,
+            beam: fathom_svo::octree_view::DEFAULT_BEAM,
+            beam_min: fathom_svo::octree_view::DEFAULT_BEAM_MIN,
             planes: false,
             fovea: fathom_svo::request_order::DEFAULT_FOVEA,
             smooth: true,
@@ -331,9 +331,9 @@ impl RenderRequest {
 
     /// The octree explorer's settings for this request (supersampled size; threads default to
     /// the machine's cores; the root is the exact cube when given, else fitted in [-4, 4]^3).
-    pub fn octree_config(&self) -> ExplorerConfig {
+    pub fn octree_config(&self) -> OctreeViewConfig {
         let o = &self.octree;
-        ExplorerConfig {
+        OctreeViewConfig {
             width: self.width * self.supersample,
             height: self.height * self.supersample,
             fidelity: o.fidelity,
@@ -355,7 +355,7 @@ impl RenderRequest {
                 Some(c) => RootSpec::from_cube(Some(c)),
                 None => RootSpec::Fit { half: o.fit_half },
             },
-            ..ExplorerConfig::default()
+            ..OctreeViewConfig::default()
         }
     }
 

@@ -322,7 +322,7 @@ impl Session {
     }
 
     /// Builds the octree for `req` if needed and settles it at the deep camera for at most
-    /// `budget_ms` (`fathom_svo::Explorer::settle_deep`); returns the frames taken.
+    /// `budget_ms` (`fathom_svo::OctreeView::settle_deep`); returns the frames taken.
     pub fn warm_octree(
         &mut self,
         camera: &Camera,
@@ -331,7 +331,7 @@ impl Session {
         budget_ms: f64,
     ) -> Result<usize, RenderError> {
         let (_, ob) = self.octree_at(camera, deep, req)?;
-        Ok(ob.explorer.settle_deep(camera, deep, usize::MAX, budget_ms))
+        Ok(ob.view.settle_deep(camera, deep, usize::MAX, budget_ms))
     }
 
     /// Checks the request, camera and deep eye, and returns the scene with the request's
@@ -360,8 +360,8 @@ impl Session {
     }
 
     /// The octree explorer, if one is built.
-    pub fn octree(&self) -> Option<&fathom_svo::Explorer> {
-        self.octree.as_ref().map(|o| &o.explorer)
+    pub fn octree(&self) -> Option<&fathom_svo::OctreeView> {
+        self.octree.as_ref().map(|o| &o.view)
     }
 }
 

@@ -7,10 +7,10 @@
 //! [smooth: 1 or 0] [fill_px, or several comma-separated] [subdivisions a frame]`
 //!
 //! The fovea (default `request_order::DEFAULT_FOVEA`) decides which leaves the fixed number of
-//! subdivisions splits: 0 builds the trees of the builds before stop 37, whose checksums
-//! `docs/svo.md` records. Smoothing (default on, as in every front end; `crate::smooth`)
+//! subdivisions splits: 0 builds the trees of the builds without a fovea, whose checksums
+//! `docs/log/svo.md` records. Smoothing (default on, as in every front end; `crate::smooth`)
 //! changes the checksummed colours wherever a frame shows voxels two or more pixels wide: 0
-//! gives the checksums of the builds before stop 38.
+//! gives the checksums of the builds before smoothing.
 //!
 //! Pixel filling (`crate::fill`, default `fill::DEFAULT_FILL_PX`): with several values (e.g.
 //! `0,4`) each checkpoint's repeated renders take them in turn on the same frozen tree, and
@@ -20,7 +20,7 @@
 
 use fathom_core::camera_path::path_preset;
 use fathom_svo::RootSpec;
-use fathom_svo::explorer::{Explorer, ExplorerConfig, Traversal};
+use fathom_svo::octree_view::{OctreeView, OctreeViewConfig, Traversal};
 use std::time::Instant;
 
 fn main() {
@@ -44,7 +44,7 @@ fn main() {
         eprintln!("render_bench: {e}");
         std::process::exit(2)
     });
-    let cfg = ExplorerConfig {
+    let cfg = OctreeViewConfig {
         threads,
         subdivide_ms: 0.0,
         min_subdivisions: subdivisions,
@@ -53,20 +53,20 @@ fn main() {
         beam: args
             .get(6)
             .and_then(|s| s.parse().ok())
-            .unwrap_or(fathom_svo::explorer::DEFAULT_BEAM),
+            .unwrap_or(fathom_svo::octree_view::DEFAULT_BEAM),
         beam_min: args
             .get(7)
             .and_then(|s| s.parse().ok())
-            .unwrap_or(fathom_svo::explorer::DEFAULT_BEAM_MIN),
+            .unwrap_or(fathom_svo::octree_view::DEFAULT_BEAM_MIN),
         fovea: args
             .get(8)
             .and_then(|s| s.parse().ok())
             .unwrap_or(fathom_svo::request_order::DEFAULT_FOVEA),
         smooth: args.get(9).is_none_or(|s| s != "0"),
         fill_px: fills[0],
-        ..ExplorerConfig::default()
+        ..OctreeViewConfig::default()
     };
-    let mut ex = Explorer::new(&p.scene, cfg).unwrap();
+    let mut ex = OctreeView::new(&p.scene, cfg).unwrap();
     let checkpoints = [frames / 3, 2 * frames / 3, frames - 1];
     let mut total_min = vec![0.0; fills.len()];
     for i in 0..frames {

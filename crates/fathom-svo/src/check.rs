@@ -2,8 +2,9 @@
 //! the traversal relies on. Used by the tests after subdivision, recombination and
 //! unification, and by the stress test every frame.
 
+use crate::geometry::Cell;
 use crate::node::{EMPTY, NONE};
-use crate::octree::{Cell, Octree};
+use crate::octree::Octree;
 
 /// Checks the tree; returns the first problem found.
 ///

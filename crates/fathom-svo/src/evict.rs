@@ -11,8 +11,9 @@
 //! over the six face-adjacent regions finds them all. Freed child blocks go to the arena's
 //! free list.
 
+use crate::geometry::Cell;
 use crate::node::{EMPTY, FREE, NONE, VISITED, opposite};
-use crate::octree::{Cell, Octree};
+use crate::octree::Octree;
 
 /// Marks the bricks enclosing node `id` as visited (rays call this; atomics, no locks). The
 /// walk stops at the first brick already marked: a marked brick always has every enclosing

@@ -6,7 +6,7 @@
 //! octree to meet the same voxel as its neighbours: the walks were three quarters of the
 //! frame. A tile's rays are therefore cast on a lattice first (every other pixel of every other
 //! row, and the tile's last row and column); a pixel between two (on a lattice row or column)
-//! or four lattice rays that all stopped on the same voxel, at least [`ExplorerConfig::fill_px`]
+//! or four lattice rays that all stopped on the same voxel, at least [`OctreeViewConfig::fill_px`]
 //! pixels wide at each, takes that voxel's colour and the lattice rays' mean distance without
 //! a ray of its own. Any other pixel casts its ray. Renders with tile starts take their finest
 //! tiles as the lattice's tiles; renders without them (the eye outside the root while tile
@@ -27,21 +27,19 @@
 //! must be every pixel's). The lattice ray that met a voxel asked for its split, as the
 //! pixels filled from it would have.
 //!
-//! [`ExplorerConfig::fill_px`]: crate::explorer::ExplorerConfig::fill_px
+//! [`OctreeViewConfig::fill_px`]: crate::octree_view::OctreeViewConfig::fill_px
 
+use crate::geometry::dim_at;
 use crate::node::NONE;
-use crate::octree::dim_at;
 use crate::traverse::Hit;
 
-/// Default [`crate::explorer::ExplorerConfig::fill_px`]: pixels between lattice rays (two
-/// pixels apart) are filled when the voxels they met are at least that wide. Zooms to 1e15
-/// (1000 frames, every 50th compared with the sphere tracer) showed the same median SSIM at 2
-/// as at 4 (Mandelbulb 0.813 and 0.815, Menger 0.605 and 0.607; 0.811 and 0.604 with every
-/// pixel cast) and ran faster at 2 (Mandelbulb 46.6 fps against 42.0-42.8; stop 44).
+/// Default [`crate::octree_view::OctreeViewConfig::fill_px`]: pixels between lattice rays (two
+/// pixels apart) are filled when the voxels they met are at least that wide. At 2 zooms look
+/// as they do at 4 or with every pixel cast, and run faster (`docs/log/svo.md`).
 pub const DEFAULT_FILL_PX: f64 = 2.0;
 
 /// Side of the square tiles a render without tile starts casts its lattices in (renders with
-/// tile starts use their finest tiles, [`crate::explorer::DEFAULT_BEAM_MIN`] by default).
+/// tile starts use their finest tiles, [`crate::octree_view::DEFAULT_BEAM_MIN`] by default).
 pub const TILE: usize = 16;
 
 /// Lattice points in a run of `n` pixels (`n` >= 1): offsets 0, 2, 4, ... and the last.

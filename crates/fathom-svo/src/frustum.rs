@@ -42,12 +42,13 @@
 //!
 //! **Refinement.** A quadrant of a tile can walk again from its parent's start ([`Seed::within`]):
 //! its rays are some of the parent's, the nodes wholly before the parent's start are skipped
-//! (the parent's walk saw them), and its bound is usually deeper. Measured on the Mandelbulb
-//! zoom it saves steps but not time (docs/svo.md), so by default tiles are not refined.
+//! (the parent's walk saw them), and its bound is usually deeper. It saves ray steps but not
+//! render time (`docs/log/svo.md`), so by default tiles are not refined.
 
 use crate::evict::mark_visited;
-use crate::octree::{BoxU, Octree};
-use crate::traverse::{Hit, Ray, Request, walk_from};
+use crate::geometry::{BoxU, Ray};
+use crate::octree::Octree;
+use crate::traverse::{Hit, Request, walk_from};
 
 /// Relative slack taken off the bound: far above the few ulps by which a ray's computed
 /// distance or a pixel's direction can differ from the exact one.
@@ -421,14 +422,11 @@ const RETRIES: [f64; 2] = [1.0 - 1.0 / 1024.0, 1.0 - 1.0 / 32.0];
 
 /// The neighbour traversal of pixel ray `r` from its tile's start `s`: the hit the ray's
 /// traversal from the eye finds, after fewer steps; `None` when its point at the start
-/// distance, and at the [`RETRIES`], is within the margin of a face of its leaf (or outside
+/// distance, and at the `RETRIES`, is within the margin of a face of its leaf (or outside
 /// `s`), so the caller must start it at the skip node.
 ///
-/// Inlined into the render loop, the 1000-frame Mandelbulb zoom renders 1-9 % faster (by blocks
-/// of 200 frames; 4-5 % more frames a second). Called, the pixel's ray was built on the stack
-/// one component at a time and read back two at a time by the start point's arithmetic,
-/// likely a store-forwarding stall on every ray: the multiply right after that load took 4 %
-/// of this function's samples.
+/// Inlined into the render loop: called, the pixel's ray was built on the stack one component
+/// at a time and read back two at a time, a store-forwarding stall on every ray.
 #[inline(always)]
 pub fn cast_at(
     tree: &Octree,

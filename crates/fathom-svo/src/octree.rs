@@ -2,7 +2,7 @@
 //! freed blocks recycled through a free list, and the exact box arithmetic of root units.
 //!
 //! Coordinates: the root is the cube `[0, 1)^3` in *root units*; world = `root_min +
-//! u * root_size`. A node at depth `d` spans `2^-d`. Two box types:
+//! u * root_size`. A node at depth `d` spans `2^-d`. Two box types (in [`crate::geometry`]):
 //!
 //! - [`Cell`]: the exact lattice position (integer coordinates at the box's depth, up to
 //!   [`MAX_DEPTH`] = 100 levels, in `i128`). The structural code (linking, unification, link
@@ -16,6 +16,7 @@
 //!
 //! Boxes are half-open: a point on a shared face belongs to the box on its positive side.
 
+use crate::geometry::{BoxU, Cell, dim_at};
 use crate::node::{EMPTY, FREE, NONE, Node};
 use glam::DVec3;
 
@@ -36,8 +37,8 @@ pub const MAX_ANCHOR_DEPTH: u8 = 50;
 pub const ANCHOR_SPAN: u8 = 48;
 
 /// The lattice point box corners are measured from: `cell * 2^-depth` in root units (it may
-/// lie outside the root, as the Menger zoom's eye does). The explorer moves it with the eye
-/// (`Explorer::render`); with `depth` 0 and `cell` 0 local coordinates are root units.
+/// lie outside the root, as the Menger zoom's eye does). The octree view moves it with the eye
+/// (`OctreeView::render`); with `depth` 0 and `cell` 0 local coordinates are root units.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Anchor {
     /// Depth of the anchor's lattice, at most [`MAX_ANCHOR_DEPTH`].
@@ -173,174 +174,6 @@ fn two_sum(a: f64, b: f64) -> (f64, f64) {
     let s = a + b;
     let bb = s - a;
     (s, (a - (s - bb)) + (b - bb))
-}
-
-/// A box by its exact lattice position: integer coordinates `ijk` at `depth` (root units
-/// `ijk * 2^-depth`). Cells of the root are in `[0, 2^depth)`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Cell {
-    /// Lattice coordinates of the minimum corner.
-    pub ijk: [i128; 3],
-    /// Depth below the root.
-    pub depth: u8,
-}
-
-impl Cell {
-    /// The root.
-    pub const ROOT: Cell = Cell {
-        ijk: [0; 3],
-        depth: 0,
-    };
-
-    /// Child `octant` (bit 0: +x half, bit 1: +y, bit 2: +z).
-    #[inline]
-    pub fn child(&self, octant: usize) -> Cell {
-        Cell {
-            ijk: std::array::from_fn(|a| 2 * self.ijk[a] + (octant >> a & 1) as i128),
-            depth: self.depth + 1,
-        }
-    }
-
-    /// The cell at depth `d <= self.depth` that contains this one.
-    #[inline]
-    pub fn snapped(&self, d: u8) -> Cell {
-        Cell {
-            ijk: self.ijk.map(|i| i >> (self.depth - d)),
-            depth: d,
-        }
-    }
-
-    /// The same-size cell across face `f`.
-    #[inline]
-    pub fn across(&self, f: usize) -> Cell {
-        let mut ijk = self.ijk;
-        ijk[f >> 1] += if f & 1 == 1 { 1 } else { -1 };
-        Cell {
-            ijk,
-            depth: self.depth,
-        }
-    }
-
-    /// True when the cell lies inside the root.
-    pub fn in_root(&self) -> bool {
-        self.ijk.iter().all(|&i| i >= 0 && i < 1i128 << self.depth)
-    }
-
-    /// Lower and upper face of the cell along `axis`, as lattice coordinates at depth `d >=
-    /// self.depth`.
-    #[inline]
-    pub fn span_at(&self, axis: usize, d: u8) -> (i128, i128) {
-        let k = d - self.depth;
-        (self.ijk[axis] << k, (self.ijk[axis] + 1) << k)
-    }
-
-    /// True when `other` lies inside this cell.
-    pub fn encloses(&self, other: &Cell) -> bool {
-        other.depth >= self.depth && other.snapped(self.depth) == *self
-    }
-
-    /// Octant of this cell's child on the way down to `other` (which it must enclose).
-    #[inline]
-    pub fn octant_towards(&self, other: &Cell) -> usize {
-        let k = other.depth - self.depth - 1;
-        (0..3).fold(0, |o, a| o | (((other.ijk[a] >> k) & 1) as usize) << a)
-    }
-}
-
-/// A box in root units: its minimum corner and depth (side `2^-depth`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BoxU {
-    /// Minimum corner.
-    pub min: [f64; 3],
-    /// Depth below the root.
-    pub depth: u8,
-}
-
-impl BoxU {
-    /// The root box under the default anchor (local coordinates = root units).
-    pub const ROOT: BoxU = BoxU {
-        min: [0.0; 3],
-        depth: 0,
-    };
-
-    /// Side length `2^-depth`.
-    #[inline(always)]
-    pub fn dim(&self) -> f64 {
-        dim_at(self.depth)
-    }
-
-    /// Box of child `octant` (bit 0: +x half, bit 1: +y, bit 2: +z).
-    #[inline(always)]
-    pub fn child(&self, octant: usize) -> BoxU {
-        let h = dim_at(self.depth + 1);
-        let mut min = self.min;
-        for (a, m) in min.iter_mut().enumerate() {
-            if octant >> a & 1 == 1 {
-                *m += h;
-            }
-        }
-        BoxU {
-            min,
-            depth: self.depth + 1,
-        }
-    }
-
-    /// The box at depth `d <= self.depth` that contains this one, for lattices that have a
-    /// corner at local 0 (depths at or below the anchor's; [`Anchor::snap`] handles the rest).
-    #[inline(always)]
-    pub fn snapped(&self, d: u8) -> BoxU {
-        let s = dim_at(d);
-        // Scaling by a power of two is exact, so this equals `(m / s).floor() * s`.
-        let inv = f64::from_bits((1023 + d as u64) << 52);
-        BoxU {
-            min: self.min.map(|m| (m * inv).floor() * s),
-            depth: d,
-        }
-    }
-
-    /// Half-open containment of a point.
-    #[inline(always)]
-    pub fn contains(&self, p: [f64; 3]) -> bool {
-        let s = self.dim();
-        (0..3).all(|a| p[a] >= self.min[a] && p[a] < self.min[a] + s)
-    }
-
-    /// Octant of the child containing `p` (assumes the box contains `p`).
-    #[inline(always)]
-    pub fn octant_of(&self, p: [f64; 3]) -> usize {
-        let h = dim_at(self.depth + 1);
-        let mut o = 0;
-        for a in 0..3 {
-            if p[a] >= self.min[a] + h {
-                o |= 1 << a;
-            }
-        }
-        o
-    }
-
-    /// The same-size box across face `f`.
-    #[inline(always)]
-    pub fn across(&self, f: usize) -> BoxU {
-        let a = f >> 1;
-        let delta = if f & 1 == 1 { self.dim() } else { -self.dim() };
-        let c = |i: usize| {
-            if i == a {
-                self.min[i] + delta
-            } else {
-                self.min[i]
-            }
-        };
-        BoxU {
-            min: [c(0), c(1), c(2)],
-            depth: self.depth,
-        }
-    }
-}
-
-/// Side of a box at depth `d`: `2^-d` (exact).
-#[inline(always)]
-pub fn dim_at(d: u8) -> f64 {
-    f64::from_bits((1023 - d as u64) << 52)
 }
 
 /// Counts kept up to date by every structural change.

@@ -2,7 +2,7 @@
 //! of the evaluation (silhouette IoU, false negatives, strict self-similarity).
 
 use crate::error::OctreeError;
-use crate::explorer::{Explorer, ExplorerConfig, SvoImage, Traversal};
+use crate::octree_view::{OctreeView, OctreeViewConfig, SvoImage, Traversal};
 use fathom_core::eval::Evaluator;
 use fathom_core::scene::Scene;
 use fathom_core::{Camera, Tape, V3};
@@ -62,12 +62,12 @@ pub struct Agreement {
 pub fn agreement(
     scene: &Scene,
     cam: &Camera,
-    mut cfg: ExplorerConfig,
+    mut cfg: OctreeViewConfig,
     eps: f64,
 ) -> Result<Agreement, OctreeError> {
     cfg.traversal = Traversal::Neighbour;
     let (w, h) = (cfg.width, cfg.height);
-    let mut ex = Explorer::new(scene, cfg)?;
+    let mut ex = OctreeView::new(scene, cfg)?;
     let settle_frames = ex.settle(cam, 200);
     let (img, reqs, _) = ex.render(cam);
     ex.release_requests(&reqs);

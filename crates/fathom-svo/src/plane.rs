@@ -26,8 +26,7 @@
 //! many half sides as the fifth byte says. Our own code: a dozen lines of encoding that the
 //! traversal reads in its inner loop.
 
-use crate::octree::BoxU;
-use crate::traverse::Ray;
+use crate::geometry::{BoxU, Ray, exit};
 use glam::DVec3;
 
 /// Offsets are clamped to this many half sides: past the cube's support (`sqrt(3)` at most)
@@ -208,7 +207,7 @@ impl SurfacePlane {
         }
         // Leaving the box: the traversal's own exit distance (`tc > t` here, so its floor
         // at `t` changes nothing).
-        let exit = crate::traverse::exit(r, b, t).0;
+        let exit = exit(r, b, t).0;
         (tc <= exit).then_some(tc)
     }
 

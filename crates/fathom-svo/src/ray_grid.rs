@@ -9,7 +9,7 @@
 //! them two (or more) at a time and the traversal loop only loads the results. The tiled
 //! render sets up a tile's row at a time ([`RayGrid::segment`], 16 pixels by default).
 
-use crate::traverse::Ray;
+use crate::geometry::Ray;
 use fathom_core::CameraFrame;
 use glam::DVec3;
 

@@ -9,17 +9,15 @@
 //! size on screen by its distance from the centre spends the budget where it lasts: on the
 //! Mandelbulb's 400-frame zoom to 1e6 the frames' median similarity to the sphere tracer rose
 //! from 0.190 to 0.260 at the same split budget, and half the budget with the fovea still
-//! beats the whole without it (`docs/svo.md`, "Splits that stay on screen"). A still view
+//! beats the whole without it (`docs/log/svo.md`, "Splits that stay on screen"). A still view
 //! ends with the same tree whatever the order: only the order changes.
 
 use crate::traverse::Request;
 use glam::DVec3;
 use rayon::prelude::*;
 
-/// The default [`Fovea::weight`]: on the Mandelbulb's 400-frame zoom to 1e6 (6 ms of splits a
-/// frame, frames 40-360, a build that still sorted every request), weights 1, 4, 16 and 64
-/// gave a median similarity (SSIM) to the sphere tracer of 0.210, 0.247-0.249, 0.237 and
-/// 0.235 (0.179 without); on the Menger's, 1 and 4 gave 0.306 and 0.323 (0.287 without).
+/// The default [`Fovea::weight`]: of the weights tried (0 to 64), the one whose zooms came
+/// closest to the sphere tracer's frames (`docs/log/svo.md`).
 pub const DEFAULT_FOVEA: f64 = 4.0;
 
 /// Where the screen's centre is, to weight requests by their distance from it: a request's
@@ -180,7 +178,7 @@ fn total_order(x: f64) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::octree::BoxU;
+    use crate::geometry::BoxU;
 
     fn ids(r: Vec<Request>) -> Vec<u32> {
         r.iter().map(|q| q.id).collect()

@@ -10,7 +10,7 @@
 //! surface (and the solid), padded by up to one cell of the search grid. When an exact
 //! bounding cube is known (the Menger sponge), [`RootSpec::Cube`] gives it.
 
-use crate::generate::{Probe, Shader};
+use crate::shader::{Probe, Shader};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -101,7 +101,7 @@ impl RootSpec {
 
 /// The bounding box of the cells that test full when `[-half, half]^3` is subdivided `levels`
 /// levels (only full cells are refined), or `None` when nothing is full. World coordinates:
-/// runs before the explorer moves the shader's origin off zero.
+/// runs before the octree view moves the shader's origin off zero.
 pub fn fit_bounds(sh: &Shader, half: f64, levels: u32) -> Option<(DVec3, DVec3)> {
     // Cells as (integer corner, level); side = 2 half / 2^level.
     let full = |ev: &mut Probe, c: [u32; 3], level: u32| {

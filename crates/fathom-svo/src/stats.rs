@@ -2,7 +2,7 @@
 //! settled, last-decade / first-decade fps ratio, peak memory, node-count growth over the
 //! brick cycle).
 
-use crate::explorer::FrameStats;
+use crate::octree_view::FrameStats;
 use serde::Serialize;
 
 /// The headline numbers of one zoom run.

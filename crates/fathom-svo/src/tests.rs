@@ -3,7 +3,7 @@
 //! test over thousands of frames.
 
 use crate::check::check;
-use crate::explorer::{Explorer, ExplorerConfig, SvoImage, Traversal};
+use crate::octree_view::{OctreeView, OctreeViewConfig, SvoImage, Traversal};
 use crate::root::{MENGER_CUBE, RootSpec};
 use fathom_core::Camera;
 use fathom_core::camera_path::path_preset;
@@ -13,14 +13,14 @@ use glam::DVec3;
 
 /// Settings of these tests: every pixel casts its ray (`fill_px` 0), so renders with and
 /// without tile starts, and by either traversal, can be compared pixel for pixel (filling
-/// has tests of its own, `explorer::fill_tests`).
-fn cfg(w: u32, h: u32) -> ExplorerConfig {
-    ExplorerConfig {
+/// has tests of its own, `octree_view::fill_tests`).
+fn cfg(w: u32, h: u32) -> OctreeViewConfig {
+    OctreeViewConfig {
         width: w,
         height: h,
         threads: 2,
         fill_px: 0.0,
-        ..ExplorerConfig::default()
+        ..OctreeViewConfig::default()
     }
 }
 
@@ -45,7 +45,7 @@ fn pole_camera() -> Camera {
 }
 
 /// Renders with `t` without changing the tree (requests released).
-fn render_with(ex: &mut Explorer, cam: &Camera, t: Traversal) -> SvoImage {
+fn render_with(ex: &mut OctreeView, cam: &Camera, t: Traversal) -> SvoImage {
     ex.cfg.traversal = t;
     let (img, reqs, _) = ex.render(cam);
     ex.release_requests(&reqs);
@@ -58,7 +58,7 @@ fn neighbour_and_kdrestart_give_identical_images() {
     // enter from the previous ray's entry node.
     let mut c = cfg(96, 72);
     c.root = MENGER_CUBE;
-    let mut ex = Explorer::new(&scenes::menger(8), c).unwrap();
+    let mut ex = OctreeView::new(&scenes::menger(8), c).unwrap();
     let cam = path_preset("menger").unwrap().camera(30, 100, 1e4);
     for _ in 0..2 {
         ex.settle(&cam, 60);
@@ -71,7 +71,7 @@ fn neighbour_and_kdrestart_give_identical_images() {
         );
     }
     // The default (fitted) root.
-    let mut ex = Explorer::new(&scenes::menger(8), cfg(96, 72)).unwrap();
+    let mut ex = OctreeView::new(&scenes::menger(8), cfg(96, 72)).unwrap();
     let cams = [
         corner_camera(),
         // Eye inside the root (skip node) and inside the central tunnel.
@@ -146,7 +146,7 @@ fn no_false_negatives_against_the_sphere_tracer() {
 fn links_stay_valid_through_subdivision_recombination_and_unification() {
     let mut c = cfg(64, 48);
     c.unify_every = 1000; // unify only when asked below
-    let mut ex = Explorer::new(&scenes::menger(8), c).unwrap();
+    let mut ex = OctreeView::new(&scenes::menger(8), c).unwrap();
     let cam = corner_camera();
     let mut emptied = 0;
     for _ in 0..30 {
@@ -184,7 +184,7 @@ fn links_stay_valid_through_subdivision_recombination_and_unification() {
 
 #[test]
 fn unvisited_bricks_are_kept_for_the_idle_limit_then_unloaded() {
-    let mut ex = Explorer::new(&scenes::menger(8), cfg(64, 48)).unwrap();
+    let mut ex = OctreeView::new(&scenes::menger(8), cfg(64, 48)).unwrap();
     let cam = corner_camera();
     ex.settle(&cam, 60);
     let away = Camera {
@@ -193,7 +193,7 @@ fn unvisited_bricks_are_kept_for_the_idle_limit_then_unloaded() {
         up: DVec3::Y,
         fov: 20.0,
     };
-    let look = |ex: &mut Explorer, c: &Camera| {
+    let look = |ex: &mut OctreeView, c: &Camera| {
         let (_, reqs, _) = ex.render(c);
         ex.release_requests(&reqs);
     };
@@ -229,7 +229,7 @@ fn stress_camera_moves_subdivision_and_eviction_without_dangling_links_or_tears(
     c.min_subdivisions = 16;
     c.subdivide_ms = 0.5;
     let p = path_preset("menger").unwrap();
-    let mut ex = Explorer::new(&p.scene, c).unwrap();
+    let mut ex = OctreeView::new(&p.scene, c).unwrap();
     let frames = 2000;
     let mut rng = 0x2545_f491_4f6c_dd1du64;
     let mut unified = 0;
@@ -249,7 +249,7 @@ fn stress_camera_moves_subdivision_and_eviction_without_dangling_links_or_tears(
         let (before, reqs, _) = ex.render(&cam);
         ex.release_requests(&reqs);
         ex.cfg.traversal = Traversal::Neighbour;
-        // ...must be exactly the frame the explorer produces while it subdivides and evicts.
+        // ...must be exactly the frame the octree view produces while it subdivides and evicts.
         let (img, st) = ex.step(&cam);
         assert_eq!(img, before, "frame {i} is torn");
         unified += st.unified;
@@ -268,7 +268,7 @@ fn bad_settings_are_refused_with_clear_errors() {
     let mut c = cfg(64, 48);
     c.fidelity = 0.0;
     assert!(
-        Explorer::new(&s, c.clone())
+        OctreeView::new(&s, c.clone())
             .err()
             .unwrap()
             .to_string()
@@ -277,7 +277,7 @@ fn bad_settings_are_refused_with_clear_errors() {
     c.fidelity = 1.0;
     c.max_memory = 10;
     assert!(
-        Explorer::new(&s, c.clone())
+        OctreeView::new(&s, c.clone())
             .err()
             .unwrap()
             .to_string()
@@ -286,7 +286,7 @@ fn bad_settings_are_refused_with_clear_errors() {
     c.max_memory = 1 << 24;
     c.width = 0;
     assert!(matches!(
-        Explorer::new(&s, c).err().unwrap(),
+        OctreeView::new(&s, c).err().unwrap(),
         crate::OctreeError::Size { .. }
     ));
 }
@@ -296,7 +296,7 @@ fn mandelbulb_traversals_agree() {
     let mb = fathom_core::presets::load("mandelbulb").unwrap();
     let mut c = cfg(160, 120);
     c.fidelity = 0.5;
-    let mut ex = Explorer::new(&mb, c).unwrap();
+    let mut ex = OctreeView::new(&mb, c).unwrap();
     let f = ex.settle(&mb.camera, 100);
     let kd = render_with(&mut ex, &mb.camera, Traversal::KdRestart);
     let nb = render_with(&mut ex, &mb.camera, Traversal::Neighbour);
@@ -340,7 +340,7 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
     // voxels whose centre is outside must still be full when a corner is inside, and rays at
     // voxel edges must not bounce between two leaves. No pixel may lie behind the careful
     // tracer's surface by more than 2 % (a hole: before the corner test, rays hit structure
-    // 100x further away). Since the estimate is first-order at the surface (2026-12-04) the
+    // 100x further away). Now that the estimate is first-order at the surface the
     // centre test finds it too, and as everywhere on the Mandelbulb the estimate's
     // conservative margin (0.13-2.3x the distance on most lines, fathom-core's fractal
     // tests) puts the octree's surface up to a few voxels in front: measured 1.0-5.3 % of the
@@ -353,7 +353,7 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
         let cam = p.camera(frame, 300, 1e11);
         let mut c = cfg(w, h);
         c.root = RootSpec::from_cube(p.cube);
-        let mut ex = Explorer::new(&p.scene, c).unwrap();
+        let mut ex = OctreeView::new(&p.scene, c).unwrap();
         ex.settle(&cam, 300);
         let kd = render_with(&mut ex, &cam, Traversal::KdRestart);
         let img = render_with(&mut ex, &cam, Traversal::Neighbour);
@@ -397,8 +397,8 @@ fn mandelbulb_deep_zoom_matches_a_careful_tracer() {
 
 /// Renders with beam tiles of side `beam` (0: every ray from the skip node) refined down to
 /// `beam_min` without changing the tree; returns the image and the node steps (beams'
-/// included). Tiles are used even where the explorer's own choice would pause them.
-fn render_beam(ex: &mut Explorer, cam: &Camera, (beam, beam_min): (u32, u32)) -> (SvoImage, u64) {
+/// included). Tiles are used even where the octree view's own choice would pause them.
+fn render_beam(ex: &mut OctreeView, cam: &Camera, (beam, beam_min): (u32, u32)) -> (SvoImage, u64) {
     ex.allow_outside_tiles();
     ex.cfg.traversal = Traversal::Neighbour;
     ex.cfg.beam = beam;
@@ -409,16 +409,16 @@ fn render_beam(ex: &mut Explorer, cam: &Camera, (beam, beam_min): (u32, u32)) ->
 }
 
 #[test]
-fn beam_start_gives_the_images_of_the_skip_node_start() {
-    // Settled views: the Mandelbulb zoom at three depths (the first with the eye outside the
-    // root), at the default LOD and at a coarse one (fidelity 4: implicit LOD stops rays on
-    // inner nodes four pixels wide, so the beams' LOD test is what stops them), and the Menger
-    // sponge's central tunnel. Single-level tiles of 16 (the default), 8 and 3 (partial tiles
-    // at the image's right and bottom edges), and refined tiles: 8 down to 4 and to 2, 16 to 8,
-    // and 12 to 3 (quadrants cut at odd sides and at the image's edges). Each must give exactly
-    // the image of rays started at the skip node, and tiles of 8 or more must save steps (else
-    // the test would prove nothing; smaller tiles' walks cost more visits than they save
-    // steps); refining 8 to 4 must start the rays deeper.
+fn tile_starts_give_the_images_of_rays_from_the_skip_node() {
+    // Tile starts ("beams" below, their first name). Settled views: the Mandelbulb zoom at three
+    // depths (the first with the eye outside the root), at the default LOD and at a coarse one
+    // (fidelity 4: implicit LOD stops rays on inner nodes four pixels wide, so the beams' LOD
+    // test is what stops them), and the Menger sponge's central tunnel. Single-level tiles of 16
+    // (the default), 8 and 3 (partial tiles at the image's right and bottom edges), and refined
+    // tiles: 8 down to 4 and to 2, 16 to 8, and 12 to 3 (quadrants cut at odd sides and at the
+    // image's edges). Each must give exactly the image of rays started at the skip node, and
+    // tiles of 8 or more must save steps (else the test would prove nothing; smaller tiles' walks
+    // cost more visits than they save steps); refining 8 to 4 must start the rays deeper.
     let p = path_preset("mandelbulb").unwrap();
     let mut views = Vec::new();
     // Frame 3 of the zoom sees the bulb from outside the root: the walks start at the root.
@@ -428,13 +428,13 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
         c.fidelity = fidelity;
         views.push((
             format!("mandelbulb frame {frame} fidelity {fidelity}"),
-            Explorer::new(&p.scene, c).unwrap(),
+            OctreeView::new(&p.scene, c).unwrap(),
             p.camera(frame, 300, 1e11),
         ));
     }
     views.push((
         "menger tunnel".into(),
-        Explorer::new(&scenes::menger(8), cfg(96, 72)).unwrap(),
+        OctreeView::new(&scenes::menger(8), cfg(96, 72)).unwrap(),
         Camera {
             eye: DVec3::new(0.02, 0.01, 0.7),
             target: DVec3::new(0.3, 0.2, -1.0),
@@ -464,7 +464,7 @@ fn beam_start_gives_the_images_of_the_skip_node_start() {
         }
         // Refining 8-pixel tiles to 4 must start the pixel rays deeper (fewer steps after the
         // start: the beams' own steps aside).
-        let after_start = |ex: &mut Explorer, beam| {
+        let after_start = |ex: &mut OctreeView, beam| {
             let (_, steps) = render_beam(ex, &cam, beam);
             steps - ex.beam_steps()
         };
@@ -494,13 +494,13 @@ fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
     c.root = RootSpec::from_cube(p.cube);
     c.planes = true;
     let cam = p.camera(150, 300, 1e11);
-    let mut settled = Explorer::new(&p.scene, c.clone()).unwrap();
+    let mut settled = OctreeView::new(&p.scene, c.clone()).unwrap();
     settled.settle(&cam, 300);
     let want = render_with(&mut settled, &cam, Traversal::Neighbour);
     assert!(want.largest_voxel_px <= 1.0, "the reference did not settle");
     c.subdivide_ms = 0.0;
     c.min_subdivisions = 50;
-    let mut ex = Explorer::new(&p.scene, c).unwrap();
+    let mut ex = OctreeView::new(&p.scene, c).unwrap();
     for _ in 0..12 {
         ex.step(&cam);
     }
@@ -516,7 +516,7 @@ fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
     assert_eq!(planes, kd, "traversals differ with planes");
     // Beam starts: the same image and the same requests as rays from the skip node, in
     // fewer steps.
-    let asked = |ex: &mut Explorer, beam: (u32, u32)| {
+    let asked = |ex: &mut OctreeView, beam: (u32, u32)| {
         ex.cfg.traversal = Traversal::Neighbour;
         ex.cfg.beam = beam.0;
         ex.cfg.beam_min = beam.1;
@@ -591,7 +591,7 @@ fn wide_leaves_drawn_with_surface_planes_lie_on_the_surface() {
 
 #[test]
 fn a_subdivision_told_to_stop_ends_at_its_next_batch_and_frees_the_rest() {
-    let mut ex = Explorer::new(&scenes::menger(8), cfg(160, 120)).unwrap();
+    let mut ex = OctreeView::new(&scenes::menger(8), cfg(160, 120)).unwrap();
     let cam = corner_camera();
     // Settle until more than two batches (64 a thread) are asked for, so an early stop shows.
     let mut reqs = Vec::new();
@@ -635,7 +635,7 @@ fn settling_probes_that_cast_only_wide_pixels_build_the_tree_probes_of_every_pix
         ("mandelbulb", mb.clone(), mb.camera.clone()),
     ] {
         // Every pixel at every probe, as the settling loops did before.
-        let mut every = Explorer::new(&scene, cfg(96, 72)).unwrap();
+        let mut every = OctreeView::new(&scene, cfg(96, 72)).unwrap();
         let mut rounds = 0;
         loop {
             let (reqs, _) = every.probe(&cam);
@@ -647,8 +647,8 @@ fn settling_probes_that_cast_only_wide_pixels_build_the_tree_probes_of_every_pix
             assert!(rounds < 200, "{name}: not settled");
         }
         // Only the pixels that were on a wide voxel, after the first probe.
-        let mut wide = Explorer::new(&scene, cfg(96, 72)).unwrap();
-        let mut settling = crate::explorer::Settling::default();
+        let mut wide = OctreeView::new(&scene, cfg(96, 72)).unwrap();
+        let mut settling = crate::octree_view::Settling::default();
         let deep = crate::DeepEye::of(&cam);
         let mut cast = Vec::new();
         loop {
@@ -712,7 +712,7 @@ fn a_still_step_that_fills_the_memory_budget_ends_there_and_counts_each_refusal_
     let mut c = cfg(160, 120);
     c.max_memory = 1 << 20;
     c.subdivide_ms = 2000.0;
-    let mut ex = Explorer::new(&scenes::menger(8), c).unwrap();
+    let mut ex = OctreeView::new(&scenes::menger(8), c).unwrap();
     let cam = corner_camera();
     let (_, st) = ex.step_deep_until(&cam, &crate::DeepEye::of(&cam), true, &|| false);
     let max = ex.tree.max_nodes as u64;
@@ -737,7 +737,7 @@ fn a_still_step_settles_past_its_own_requests_to_the_settled_tree() {
     let deep = crate::DeepEye::of(&cam);
     // A moving view's step splits only what its render asked for (the stop is asked
     // `asked` times on the way, never true).
-    let mut moving = Explorer::new(&scenes::menger(8), c.clone()).unwrap();
+    let mut moving = OctreeView::new(&scenes::menger(8), c.clone()).unwrap();
     let asked = std::cell::Cell::new(0usize);
     let (_, mv) = moving.step_deep_until(&cam, &deep, false, &|| {
         asked.set(asked.get() + 1);
@@ -746,17 +746,17 @@ fn a_still_step_settles_past_its_own_requests_to_the_settled_tree() {
     assert!(mv.subdivisions > 0);
     assert!(!moving.probe(&cam).0.is_empty());
     // A still one goes on probing the pixels its render left unsettled, to the end.
-    let mut still = Explorer::new(&scenes::menger(8), c.clone()).unwrap();
+    let mut still = OctreeView::new(&scenes::menger(8), c.clone()).unwrap();
     let (_, st) = still.step_deep_until(&cam, &deep, true, &|| false);
     assert!(still.probe(&cam).0.is_empty(), "settled in one still step");
-    let mut settled = Explorer::new(&scenes::menger(8), c.clone()).unwrap();
+    let mut settled = OctreeView::new(&scenes::menger(8), c.clone()).unwrap();
     settled.settle(&cam, 100);
     assert_eq!(still.tree.counts().nodes, settled.tree.counts().nodes);
     assert_eq!(st.subdivisions as usize * 8 + 1, still.tree.counts().nodes);
     check(&still.tree).unwrap();
     // Told to stop once the render's requests are split (the stop turns true at its first
     // question past the moving step's), it settles no further: the moving step's splits.
-    let mut stopped = Explorer::new(&scenes::menger(8), c).unwrap();
+    let mut stopped = OctreeView::new(&scenes::menger(8), c).unwrap();
     let n = asked.get();
     asked.set(0);
     let (_, st) = stopped.step_deep_until(&cam, &deep, true, &|| {

@@ -21,37 +21,13 @@
 //! (an atomic store: any valid link is correct, a better one only saves steps).
 
 use crate::evict::mark_visited;
+use crate::geometry::{BoxU, Ray, dim_at, enter_root, exit};
 use crate::node::{NONE, REQUESTED};
-use crate::octree::{BoxU, Octree, dim_at};
+use crate::octree::Octree;
 
 /// Most node steps one ray may take before it is declared a miss (a guard, never reached on a
 /// consistent tree).
 pub const MAX_STEPS: u32 = 1 << 16;
-
-/// A ray in root units.
-#[derive(Clone, Copy, Debug)]
-pub struct Ray {
-    /// Origin.
-    pub o: [f64; 3],
-    /// Unit direction.
-    pub d: [f64; 3],
-    /// Implicit-LOD factor: a node is below the pixel footprint when `side < t * lod`.
-    pub lod: f64,
-    /// `1 / d` per axis.
-    pub inv: [f64; 3],
-}
-
-impl Ray {
-    /// A ray from `o` along unit `d` with LOD factor `lod`.
-    pub fn new(o: [f64; 3], d: [f64; 3], lod: f64) -> Ray {
-        Ray {
-            o,
-            d,
-            lod,
-            inv: d.map(|x| 1.0 / x),
-        }
-    }
-}
 
 /// What a ray found.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,113 +89,6 @@ impl Request {
 
 /// Where a ray starts: the leaf containing the eye and its box.
 pub type Start = Option<(u32, BoxU)>;
-
-/// Entry distance into the root (box `root`, local units) and the point just inside it, or
-/// `None` when the ray misses. Uses the ray's reciprocal direction (no divisions). Inlined:
-/// returned through memory, the point's components written one by one were read back as one
-/// wide load by the caller, stalling store forwarding on every ray.
-#[inline(always)]
-fn enter_root(r: &Ray, root: &BoxU) -> Option<(f64, [f64; 3])> {
-    let mut t0 = 0.0f64;
-    let mut t1 = f64::INFINITY;
-    let mut axis = 3;
-    for a in 0..3 {
-        let (min, max) = (root.min[a], root.min[a] + 1.0);
-        if r.d[a] == 0.0 {
-            if r.o[a] < min || r.o[a] >= max {
-                return None;
-            }
-            continue;
-        }
-        let lo = (min - r.o[a]) * r.inv[a];
-        let hi = (max - r.o[a]) * r.inv[a];
-        let (n, f) = if r.d[a] > 0.0 { (lo, hi) } else { (hi, lo) };
-        if n > t0 {
-            t0 = n;
-            axis = a;
-        }
-        t1 = t1.min(f);
-    }
-    if t0 > t1 {
-        return None;
-    }
-    // Clamp into the root like `exit` does: within an ulp of a root edge, `o + t0 d` can round
-    // outside, which would turn a hit on a root face into a miss. The entry face's coordinate
-    // is the face itself. Built component by component, as in `exit`: an indexed store into
-    // the array, read whole when the result is returned, stalled store forwarding on every
-    // ray (with the eye outside the root this function was 16 % of a Menger zoom's run).
-    let c = |a: usize| {
-        let hi = below(root.min[a] + 1.0);
-        if a == axis {
-            if r.d[a] > 0.0 { root.min[a] } else { hi }
-        } else {
-            clamp(r.o[a] + t0 * r.d[a], root.min[a], hi)
-        }
-    };
-    Some((t0, [c(0), c(1), c(2)]))
-}
-
-/// `x.next_down()` for the finite box coordinates `exit` uses, without the NaN and infinity
-/// checks of the general function: one integer decrement for `x > 0` (local coordinates can
-/// be negative: those take the general function).
-#[inline(always)]
-fn below(x: f64) -> f64 {
-    if x > 0.0 {
-        f64::from_bits(x.to_bits() - 1)
-    } else {
-        x.next_down()
-    }
-}
-
-/// `x.clamp(lo, hi)` without its `lo <= hi` assertion (NaN stays NaN, as with `clamp`).
-#[inline(always)]
-fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
-    let y = if x < lo { lo } else { x };
-    if y > hi { hi } else { y }
-}
-
-/// Exit distance of the ray from box `b`, the exit face, and the point just across it.
-#[inline(always)]
-pub(crate) fn exit(r: &Ray, b: &BoxU, t: f64) -> (f64, usize, [f64; 3]) {
-    let s = b.dim();
-    let mut best = f64::INFINITY;
-    let mut axis = 0;
-    for a in 0..3 {
-        let da = r.d[a];
-        if da == 0.0 {
-            continue;
-        }
-        let face = if da > 0.0 { b.min[a] + s } else { b.min[a] };
-        // Multiplying by the precomputed reciprocal: both traversals do the same, so their
-        // results stay identical.
-        let ta = (face - r.o[a]) * r.inv[a];
-        if ta < best {
-            best = ta;
-            axis = a;
-        }
-    }
-    let t = best.max(t);
-    let pos = r.d[axis] > 0.0;
-    let face = if pos {
-        b.min[axis] + s
-    } else {
-        below(b.min[axis])
-    };
-    // Built component by component (no indexed store into an array that is then read whole:
-    // that stalls store forwarding in this hot loop). The other coordinates are clamped into
-    // this box: at an edge the exit distance equals `t`, and `o + t d` rounded can land on the
-    // far side of a face the ray already crossed; without the clamp two leaves at an edge sent
-    // the ray back and forth until the step guard declared a miss (seen at zoom 1e11).
-    let c = |a: usize| {
-        if a == axis {
-            face
-        } else {
-            clamp(r.o[a] + t * r.d[a], b.min[a], below(b.min[a] + s))
-        }
-    };
-    let p = [c(0), c(1), c(2)];
-    (t, 2 * axis + pos as usize, p)
-}
 
 /// The leaf (or LOD-terminating inner node) handling shared by both traversals. Returns the
 /// hit when the ray stops here: a full leaf wider than the ray's pixel is met where the ray

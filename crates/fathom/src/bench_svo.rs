@@ -17,7 +17,7 @@ use fathom_render::zoom::{Zoom, ZoomReport};
 use fathom_render::{Backend, OctreeSettings, RenderRequest};
 use fathom_svo::outline::{agreement, similarity};
 use fathom_svo::stats::median;
-use fathom_svo::{Explorer, ExplorerConfig, RootSpec, Traversal};
+use fathom_svo::{OctreeView, OctreeViewConfig, RootSpec, Traversal};
 use plotters::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -499,12 +499,12 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
         ("mandelbox", mbox.clone(), mbox.camera.clone(), 4.0),
     ];
     for (name, scene, cam, half) in cases {
-        let cfg = ExplorerConfig {
+        let cfg = OctreeViewConfig {
             width: 160,
             height: 120,
             fidelity: 0.5,
             root: RootSpec::centred(half),
-            ..ExplorerConfig::default()
+            ..OctreeViewConfig::default()
         };
         let ag = agreement(&scene, &cam, cfg, 0.3).map_err(|e| e.to_string())?;
         let _ = writeln!(
@@ -536,13 +536,13 @@ pub fn run(a: SvoArgs) -> Result<(), String> {
             up: glam::DVec3::Y,
             fov: p.fov,
         };
-        let cfg = ExplorerConfig {
+        let cfg = OctreeViewConfig {
             width: 320,
             height: 240,
             root: RootSpec::from_cube(p.cube),
-            ..ExplorerConfig::default()
+            ..OctreeViewConfig::default()
         };
-        let mut ex = Explorer::new(&p.scene, cfg).map_err(|e| e.to_string())?;
+        let mut ex = OctreeView::new(&p.scene, cfg).map_err(|e| e.to_string())?;
         ex.settle(&cam, 200);
         let (img, reqs, _) = ex.render(&cam);
         ex.release_requests(&reqs);

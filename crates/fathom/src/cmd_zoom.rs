@@ -102,7 +102,7 @@ pub struct ZoomArgs {
     pub max_memory: String,
     /// Subdivision time per frame in ms: more gives finer detail sooner, less a higher frame
     /// rate.
-    #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_SUBDIVIDE_MS)]
+    #[arg(long, default_value_t = fathom_svo::octree_view::DEFAULT_SUBDIVIDE_MS)]
     pub subdivide_ms: f64,
     /// Hold this frame rate: a frame whose render leaves less than --subdivide-ms of the frame
     /// time subdivides for what is left, down to half of it (0: always --subdivide-ms),
@@ -116,11 +116,11 @@ pub struct ZoomArgs {
     /// Tile starts: each tile of this many pixels square walks the octree nodes its frustum
     /// meets once, and all its rays start where none of them can have stopped yet (0: every
     /// ray from the eye's leaf). The same images, fewer steps per ray.
-    #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_BEAM)]
+    #[arg(long, default_value_t = fathom_svo::octree_view::DEFAULT_BEAM)]
     pub beam: u32,
     /// Finest tile: tiles are cut into quadrants, each refining its parent's start with a
     /// walk of its own, down to this side in pixels (the --beam value: one level).
-    #[arg(long, default_value_t = fathom_svo::explorer::DEFAULT_BEAM_MIN)]
+    #[arg(long, default_value_t = fathom_svo::octree_view::DEFAULT_BEAM_MIN)]
     pub beam_min: u32,
     /// Draw voxels wider than a pixel cut by the surface plane through them (shaded where
     /// the line of sight meets the surface, with the distance gradient there as normal):
