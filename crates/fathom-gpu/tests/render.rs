@@ -250,10 +250,17 @@ fn a_frame_in_bands_is_the_whole_frame_and_a_cancel_stops_it() {
     }
     let mut calls = 0;
     let e = r
-        .render_in_bands(&scene, &tape, &scene.camera, &mono(72, 50), 16, &mut |_, _| {
-            calls += 1;
-            false
-        })
+        .render_in_bands(
+            &scene,
+            &tape,
+            &scene.camera,
+            &mono(72, 50),
+            16,
+            &mut |_, _| {
+                calls += 1;
+                false
+            },
+        )
         .unwrap_err();
     assert!(matches!(e, fathom_gpu::GpuError::Cancelled), "{e}");
     assert_eq!(calls, 1, "the frame stopped at its first band");
