@@ -3,7 +3,7 @@
 //!
 //! Lobes, mixed by metallic `m` and transmission `t`:
 //! - `(1 - m)(1 - t)` **dielectric over diffuse**: a GGX reflection with Schlick's Fresnel
-//!   (F0 = 0.08 specular, tinted), its Kulla-Conty multiple-scattering lobe, and under it a
+//!   (F0 = 0.08 specular, tinted; F90 = min(1, 50 F0) so specular 0 is pure Lambert), its Kulla-Conty multiple-scattering lobe, and under it a
 //!   Lambertian base scaled by `(1 - Es(mu_o)) (1 - Es(mu_i)) / (1 - Es_avg)` where `Es` is the
 //!   specular layer's directional albedo: the energy the coat does not reflect goes to the
 //!   base, reciprocally (the coupling of Kulla and Conty 2017, section 5.1). An albedo-1
@@ -57,10 +57,17 @@ pub struct Bsdf {
     w_avg: f64,
 }
 
-/// Schlick's Fresnel.
+/// The grazing reflectance paired with `f0`: 1 for any real material, falling to 0 as F0
+/// does below 2 % (Filament's "specular occlusion" F90 = saturate(50 F0)), so a material
+/// with specular 0 is purely Lambertian and a black metal stays black.
+fn f90(f0: DVec3) -> DVec3 {
+    (f0 * 50.0).min(DVec3::ONE)
+}
+
+/// Schlick's Fresnel with a grazing reflectance [`f90`].
 fn schlick(f0: DVec3, c: f64) -> DVec3 {
     let w = (1.0 - c).clamp(0.0, 1.0).powi(5);
-    f0 + (DVec3::ONE - f0) * w
+    f0 + (f90(f0) - f0) * w
 }
 
 /// The exact Fresnel reflectance of a smooth dielectric interface for cos(theta_i) `ci` >= 0
@@ -78,9 +85,9 @@ pub fn fresnel_dielectric(ci: f64, eta: f64) -> f64 {
 }
 
 /// Kulla and Conty's colour factor of the multiple-scattering lobe: the average Fresnel
-/// F_avg (for Schlick, F0 + (1 - F0) / 21) compounded over the inter-reflections.
+/// F_avg (for Schlick, F0 + (F90 - F0) / 21) compounded over the inter-reflections.
 fn f_ms(f0: DVec3, e_avg: f64) -> DVec3 {
-    let favg = f0 + (DVec3::ONE - f0) / 21.0;
+    let favg = f0 + (f90(f0) - f0) / 21.0;
     favg * favg * e_avg / (DVec3::ONE - favg * (1.0 - e_avg))
 }
 
@@ -127,16 +134,16 @@ impl Bsdf {
     }
 
     /// The directional albedo of the specular layer with reflectance `f0` at cos `mu`:
-    /// single scattering with Schlick (F0 (E - W) + W) plus the multiple-scattering lobe.
+    /// single scattering with Schlick (F0 (E - W) + F90 W) plus the multiple-scattering lobe.
     fn layer_albedo(&self, f0: DVec3, mu: f64) -> DVec3 {
         let (e, w) = AlbedoTables::get().lookup(mu, self.rough);
-        f0 * (e - w) + DVec3::splat(w) + f_ms(f0, self.e_avg) * (1.0 - e)
+        f0 * (e - w) + f90(f0) * w + f_ms(f0, self.e_avg) * (1.0 - e)
     }
 
     /// Its cosine-weighted hemispherical average.
     fn layer_albedo_avg(&self, f0: DVec3) -> DVec3 {
         f0 * (self.e_avg - self.w_avg)
-            + DVec3::splat(self.w_avg)
+            + f90(f0) * self.w_avg
             + f_ms(f0, self.e_avg) * (1.0 - self.e_avg)
     }
 
@@ -177,7 +184,7 @@ impl Bsdf {
     fn lobe_probabilities(&self, wo: DVec3) -> [f64; 3] {
         let mu = wo.z.max(1e-6);
         let (e, w) = AlbedoTables::get().lookup(mu, self.rough);
-        let single = |f0: DVec3| luminance(f0 * (e - w) + DVec3::splat(w));
+        let single = |f0: DVec3| luminance(f0 * (e - w) + f90(f0) * w);
         let multi = |f0: DVec3| luminance(f_ms(f0, self.e_avg)) * (1.0 - e);
         let mut p_ggx = 0.0;
         let mut p_cos = 0.0;

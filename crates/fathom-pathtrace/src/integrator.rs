@@ -36,6 +36,9 @@ use crate::shared::{MIN_EPSILON, RR_MAX_SURVIVAL, RR_MIN_SURVIVAL, RR_START, SUR
 use fathom_core::{Evaluator, Scene, Tape, V3};
 use glam::DVec3;
 
+/// Smallest cos(theta_o) a surface is shaded at.
+const MIN_COS: f64 = 1e-4;
+
 /// A scene prepared for path tracing.
 #[derive(Clone, Debug)]
 pub struct PathTracer {
@@ -46,11 +49,14 @@ pub struct PathTracer {
     cones: Vec<ConeLight>,
     spheres: Vec<SphereLight>,
     env: Environment,
+    /// Scale of the environment where it lights surfaces.
+    env_light: f64,
     medium: Option<Medium>,
     max_bounces: u32,
     width: u32,
     height: u32,
     seed: u32,
+    light_sampling: bool,
 }
 
 /// What one camera path returns.
@@ -110,10 +116,18 @@ impl PathTracer {
             .filter(|l| l.intensity > 0.0 && l.direction.length_squared() > 0.0)
             .map(|l| ConeLight::from_legacy(l, sun_radius))
             .collect();
-        let env = settings.environment.unwrap_or(Environment::Sky {
-            top: DVec3::from(r.sky_top),
-            bottom: DVec3::from(r.sky_bottom),
-        });
+        let (env, default_light) = match settings.environment {
+            Some(e) => (e, 1.0),
+            None => {
+                let (top, bottom) = (DVec3::from(r.sky_top), DVec3::from(r.sky_bottom));
+                // The sky's mean over the sphere: bottom below the horizon, and above it
+                // the mean of lerp(bottom, top, sqrt(y)) over y uniform in [0, 1].
+                let mean = crate::sampling::luminance(bottom + (top - bottom) / 3.0);
+                let k = if mean > 0.0 { r.ambient / mean } else { 0.0 };
+                (Environment::Sky { top, bottom }, k)
+            }
+        };
+        let env_light = settings.sky_light.unwrap_or(default_light);
         let medium = match settings.fog {
             Some(m) => Some(m),
             None => default_fog(r.fog),
@@ -135,12 +149,29 @@ impl PathTracer {
             cones,
             spheres: settings.sphere_lights,
             env,
+            env_light,
             medium,
             max_bounces: settings.max_bounces,
             width: settings.width,
             height: settings.height,
             seed: settings.seed,
+            light_sampling: settings.light_sampling,
         })
+    }
+
+    /// The MIS weight of reaching a light by a continuation drawn with `prev_pdf` (`None`
+    /// after the camera or a delta lobe) when light sampling has density `light_pdf` there.
+    fn emitter_weight(&self, prev_pdf: Option<f64>, light_pdf: f64) -> f64 {
+        match prev_pdf {
+            Some(p) if self.light_sampling => power_heuristic(p, light_pdf),
+            _ => 1.0,
+        }
+    }
+
+    /// The same tracer with another sampler seed (independent noise, e.g. for a reference).
+    pub fn with_seed(mut self, seed: u32) -> Self {
+        self.seed = seed;
+        self
     }
 
     /// Image size.
@@ -242,8 +273,9 @@ impl PathTracer {
                 add(ls, ev);
             }
         }
-        if !self.env.is_black() {
+        if !self.env.is_black() && self.env_light > 0.0 {
             let (wi, radiance, pdf) = self.env.sample(s.next_2d());
+            let radiance = radiance * self.env_light;
             add(
                 LightSample {
                     wi,
@@ -256,6 +288,31 @@ impl PathTracer {
             );
         }
         (l, evals)
+    }
+
+    /// [`PathTracer::direct`] unless light sampling is off. Delta lights (cones of radius 0
+    /// or without shadows) can only be reached this way, so they are always sampled.
+    fn direct_if_enabled(
+        &self,
+        ev: &mut Evaluator<f64>,
+        s: &mut PixelSampler,
+        origin: DVec3,
+        eps: f64,
+        eval: &dyn Fn(DVec3) -> (DVec3, f64),
+    ) -> (DVec3, u64) {
+        if self.light_sampling {
+            return self.direct(ev, s, origin, eps, eval);
+        }
+        let mut l = DVec3::ZERO;
+        for c in self.cones.iter().filter(|c| c.is_delta()) {
+            let ls = c.sample(s.next_2d());
+            let (f, _) = eval(ls.wi);
+            let visible = !ls.shadows || !self.occluded(ev, origin, ls.wi, ls.distance, eps).0;
+            if visible {
+                l += f * ls.radiance * self.fog_transmittance(origin, ls.wi, ls.distance);
+            }
+        }
+        (l, 0)
     }
 
     /// Traces sample `index` of pixel (`x`, `y`).
@@ -288,6 +345,8 @@ impl PathTracer {
         // Density the last continuation was drawn with; `None` after the camera or a delta
         // lobe (then whatever it reaches counts fully).
         let mut prev_pdf: Option<f64> = None;
+        // Whether every vertex so far was a delta lobe (the camera sees through mirrors).
+        let mut seen_from_camera = true;
         let mut scattered = false;
         let mut interior = DVec3::ZERO;
         let mut interior_material: Option<PbrMaterial> = None;
@@ -333,7 +392,7 @@ impl PathTracer {
                         let eps = ray.eps0 + self.params.eps_slope * ts;
                         let g = med.g;
                         let dir = ray.d;
-                        let (ld, n) = self.direct(ev, &mut s, p, eps, &|wi| {
+                        let (ld, n) = self.direct_if_enabled(ev, &mut s, p, eps, &|wi| {
                             let ph = crate::medium::hg(dir.dot(wi), g);
                             (DVec3::splat(ph), ph)
                         });
@@ -341,6 +400,7 @@ impl PathTracer {
                         out.radiance += beta * ld;
                         let (wi, pdf) = sample_hg(ray.d, g, s.next_2d());
                         prev_pdf = Some(pdf);
+                        seen_from_camera = false;
                         ray = Ray {
                             o: p,
                             d: wi,
@@ -357,7 +417,7 @@ impl PathTracer {
             }
             if let Some((t, i)) = light_hit {
                 let sl = &self.spheres[i];
-                let w = prev_pdf.map_or(1.0, |p| power_heuristic(p, sl.pdf(ray.o)));
+                let w = self.emitter_weight(prev_pdf, sl.pdf(ray.o));
                 out.radiance += beta * sl.radiance() * w;
                 if bounce == 0 {
                     out.depth = t;
@@ -368,11 +428,23 @@ impl PathTracer {
                 if !ray.inside {
                     // The environment and the cones of directional lights; fog was
                     // accounted for above.
-                    let mut l = self.env.radiance(ray.d)
-                        * prev_pdf.map_or(1.0, |p| power_heuristic(p, self.env.pdf(ray.d)));
+                    // Seen directly or through mirrors: the background as it is; after a
+                    // diffuse or glossy bounce: the environment as a light.
+                    let scale = if seen_from_camera {
+                        1.0
+                    } else {
+                        self.env_light
+                    };
+                    let light_pdf = if self.env_light > 0.0 {
+                        self.env.pdf(ray.d)
+                    } else {
+                        0.0
+                    };
+                    let mut l =
+                        self.env.radiance(ray.d) * scale * self.emitter_weight(prev_pdf, light_pdf);
                     for c in &self.cones {
                         if let Some((radiance, pdf)) = c.seen(ray.d) {
-                            l += radiance * prev_pdf.map_or(1.0, |p| power_heuristic(p, pdf));
+                            l += radiance * self.emitter_weight(prev_pdf, pdf);
                         }
                     }
                     out.radiance += beta * l;
@@ -391,14 +463,7 @@ impl PathTracer {
             } else {
                 let mat = self.material_at(ev, p, n_out);
                 out.evaluations += 1;
-                // Face the viewer: a normal that points away (the estimate's noise at a
-                // grazing hit) would put wo below the surface.
-                let n = if n_out.dot(wo_world) < 0.0 {
-                    -n_out
-                } else {
-                    n_out
-                };
-                (n, Bsdf::new(&mat), mat)
+                (n_out, Bsdf::new(&mat), mat)
             };
             if !ray.inside {
                 out.radiance += beta * mat.emitted();
@@ -412,11 +477,18 @@ impl PathTracer {
                 break;
             }
             let frame = Frame::new(n);
-            let wo = frame.to_local(wo_world);
+            // A ray that grazes a surface within the pixel footprint counts as a hit while
+            // still going away from it (wo below the surface): shade it as seen at grazing
+            // incidence from outside, as the Blinn-Phong shader does.
+            let mut wo = frame.to_local(wo_world);
+            if wo.z < MIN_COS {
+                wo.z = MIN_COS;
+                wo = wo.normalize();
+            }
             let lift = SURFACE_LIFT * eps;
             if bsdf.has_smooth_part() {
                 let origin = p + n * lift;
-                let (ld, k) = self.direct(ev, &mut s, origin, eps, &|wi| {
+                let (ld, k) = self.direct_if_enabled(ev, &mut s, origin, eps, &|wi| {
                     let wl = frame.to_local(wi);
                     if wl.z <= 0.0 {
                         return (DVec3::ZERO, 0.0);
@@ -442,6 +514,7 @@ impl PathTracer {
                 }
             }
             prev_pdf = if bs.delta { None } else { Some(bs.pdf) };
+            seen_from_camera &= bs.delta;
             if bounce >= RR_START {
                 let q = beta.max_element().clamp(RR_MIN_SURVIVAL, RR_MAX_SURVIVAL);
                 if s.next_1d() >= q {

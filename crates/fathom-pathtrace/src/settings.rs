@@ -41,12 +41,20 @@ pub struct PathSettings {
     pub sphere_lights: Vec<SphereLight>,
     /// `None`: the scene's sky gradient.
     pub environment: Option<Environment>,
+    /// Scale of the environment's radiance where it lights surfaces (what the camera sees
+    /// directly or in mirrors is unscaled); `None`: 1, except for the scene's own sky, where
+    /// it is `ambient` / (the sky's mean luminance), so the sky lights the scene as strongly
+    /// as today's ambient term did while the background keeps its colour. [0, 1e6].
+    pub sky_light: Option<f64>,
     /// `None`: the scene's fog setting as a homogeneous medium (see [`default_fog`]).
     pub fog: Option<Medium>,
     /// One look per tape material (node, in tape order); `None`: the scene's materials.
     pub looks: Option<Vec<Look>>,
     /// Scene-wide sampler seed.
     pub seed: u32,
+    /// Next-event estimation with MIS (the default); `false` finds lights only by BSDF
+    /// sampling, which converges to the same image more slowly (for validation).
+    pub light_sampling: bool,
 }
 
 impl PathSettings {
@@ -61,9 +69,11 @@ impl PathSettings {
             sun_radius: None,
             sphere_lights: Vec::new(),
             environment: None,
+            sky_light: None,
             fog: None,
             looks: None,
             seed: 0,
+            light_sampling: true,
         }
     }
 }
@@ -175,6 +185,9 @@ impl PathSettings {
         range("aperture", self.aperture, 0.0, 1e6, "[0, 1e6]")?;
         if let Some(f) = self.focus_distance {
             range("focus_distance", f, 1e-9, 1e12, "[1e-9, 1e12]")?;
+        }
+        if let Some(k) = self.sky_light {
+            range("sky_light", k, 0.0, 1e6, "[0, 1e6]")?;
         }
         if let Some(r) = self.sun_radius {
             range("sun_radius", r, 0.0, 0.5, "[0, 0.5] radians")?;
