@@ -258,7 +258,7 @@ impl Bsdf {
             return None;
         }
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let weight = self.eval(wo, wi) * wi.z / pdf;

@@ -253,14 +253,9 @@ mod tests {
             }
         }
         let out = denoise(&f, &DenoiseSettings::default());
-        for i in 0..out.len() {
-            for c in 0..3 {
-                assert!(
-                    (out[i][c] - f.colour[i][c]).abs() < 1e-3,
-                    "pixel {i}: {:?} vs {:?}",
-                    out[i],
-                    f.colour[i]
-                );
+        for (i, (o, c)) in out.iter().zip(&f.colour).enumerate() {
+            for k in 0..3 {
+                assert!((o[k] - c[k]).abs() < 1e-3, "pixel {i}: {o:?} vs {c:?}");
             }
         }
     }

@@ -159,8 +159,8 @@ fn evaluation_is_reciprocal() {
     for (name, m) in materials() {
         let b = Bsdf::new(&m);
         for _ in 0..200 {
-            let wo = dir(rng.next() * 1.5, rng.next() * 6.28);
-            let wi = dir(rng.next() * 1.5, rng.next() * 6.28);
+            let wo = dir(rng.next() * 1.5, rng.next() * 2.0 * PI);
+            let wi = dir(rng.next() * 1.5, rng.next() * 2.0 * PI);
             let a = b.eval(wo, wi);
             let c = b.eval(wi, wo);
             assert!(
