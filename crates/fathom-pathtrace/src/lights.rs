@@ -54,6 +54,8 @@ pub struct ConeLight {
 impl ConeLight {
     /// A legacy light with angular radius `radius` (radians, >= 0).
     pub fn from_legacy(l: &fathom_core::scene::Light, radius: f64) -> ConeLight {
+        // A light without shadows is a pure direction: no cone to see or to sample.
+        let radius = if l.shadows { radius } else { 0.0 };
         let irradiance = DVec3::from(l.colour) * l.intensity * PI;
         let direction = l.direction.normalize();
         let s = radius.sin();
@@ -92,11 +94,7 @@ impl ConeLight {
         LightSample {
             wi,
             radiance: self.radiance,
-            pdf: if self.shadows {
-                cone_pdf(self.one_minus_cos)
-            } else {
-                f64::INFINITY
-            },
+            pdf: cone_pdf(self.one_minus_cos),
             distance: f64::INFINITY,
             shadows: self.shadows,
         }
@@ -347,6 +345,19 @@ mod tests {
                 "radius {radius}: {e} vs {want}"
             );
         }
+    }
+
+    #[test]
+    fn lights_without_shadows_are_directions_with_the_same_irradiance() {
+        let l = fathom_core::scene::Light {
+            shadows: false,
+            ..Default::default()
+        };
+        let c = ConeLight::from_legacy(&l, 0.1);
+        assert!(c.is_delta() && c.one_minus_cos == 0.0);
+        let s = c.sample([0.3, 0.6]);
+        assert!(s.pdf.is_infinite() && !s.shadows);
+        assert_eq!(s.radiance, DVec3::from(l.colour) * l.intensity * PI);
     }
 
     #[test]
