@@ -306,6 +306,7 @@ fn rmse_falls_like_one_over_sqrt_spp() {
     );
     let slope = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>()
         / pts.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+    println!("slope {slope}, points {pts:?}");
     assert!(
         (-0.65..=-0.40).contains(&slope),
         "slope {slope}, points {pts:?}"
