@@ -99,6 +99,18 @@ pub struct ViewSettings {
     /// Density grid, extinction, albedo and samples of the volume renderer (the scene as a
     /// cloud).
     pub volume: fathom_render::request::VolumeSettings,
+    /// Samples cap, bounces, lens and denoising of the path tracer (samples accumulate while
+    /// the view holds still; moving shows the preview tracer).
+    pub path: fathom_render::PathRequest,
+}
+
+/// The window's path-tracing settings: up to 1024 samples per pixel (a clean picture), so a
+/// still view stops using the CPU once it is done.
+fn window_path_settings() -> fathom_render::PathRequest {
+    fathom_render::PathRequest {
+        spp: 1024,
+        ..Default::default()
+    }
 }
 
 impl ViewSettings {
@@ -124,6 +136,11 @@ impl ViewSettings {
         r.octree.planes = self.planes;
         r.octree.smooth = self.smooth;
         r.volume = self.volume.clone();
+        if self.backend == Backend::Path {
+            // The path tracer antialiases by its samples and has its own occlusion.
+            r.ssao = 0.0;
+            r.path = self.path.clone();
+        }
         r
     }
 }
@@ -352,6 +369,7 @@ impl ExplorerApp {
                 planes: false,
                 smooth: true,
                 volume: Default::default(),
+                path: window_path_settings(),
             },
             viewport: Viewport::new(opts.target_ms),
             worker,
@@ -1238,6 +1256,7 @@ impl ExplorerApp {
                 Backend::Gpu => gpu_label,
                 Backend::Octree => "octree",
                 Backend::Volume => "volume (cloud)",
+                Backend::Path => "path tracer",
             })
             .show_ui(ui, |ui| {
                 ui.selectable_value(&mut s.backend, Backend::Trace, "CPU tracer");
@@ -1248,6 +1267,12 @@ impl ExplorerApp {
                     .on_hover_text(
                         "the scene's interior as a cloud, path-traced (fathom-volume); \
                          refines while the view is still",
+                    );
+                ui.selectable_value(&mut s.backend, Backend::Path, "path tracer")
+                    .on_hover_text(
+                        "global illumination, soft shadows, depth of field (CPU): samples \
+                         accumulate while the view holds still; moving or editing shows the \
+                         preview tracer and starts over",
                     );
             });
         ui.horizontal(|ui| {
@@ -1287,6 +1312,36 @@ impl ExplorerApp {
             ui.add(egui::Slider::new(&mut v.g, -0.95..=0.95).text("anisotropy g"));
             ui.add(egui::Slider::new(&mut v.spp, 1..=64).text("samples per frame"));
         }
+        if s.backend == Backend::Path {
+            let p = &mut s.path;
+            ui.add(
+                egui::Slider::new(&mut p.spp, 1..=4096)
+                    .logarithmic(true)
+                    .text("samples per pixel"),
+            )
+            .on_hover_text("accumulation stops here; the noise falls as 1/sqrt(samples)");
+            ui.add(egui::Slider::new(&mut p.max_bounces, 1..=32).text("bounces"));
+            ui.add(
+                egui::Slider::new(&mut p.aperture, 0.0..=1.0)
+                    .logarithmic(true)
+                    .text("aperture"),
+            )
+            .on_hover_text("lens radius in scene units: 0 keeps everything sharp");
+            let mut focus = p.focus_distance.unwrap_or(0.0);
+            if ui
+                .add(
+                    egui::Slider::new(&mut focus, 0.0..=100.0)
+                        .logarithmic(true)
+                        .text("focus distance"),
+                )
+                .on_hover_text("0: the camera's target (orbit pivot) is in focus")
+                .changed()
+            {
+                p.focus_distance = (focus > 0.0).then_some(focus);
+            }
+            ui.checkbox(&mut p.denoise, "denoise")
+                .on_hover_text("edge-aware à-trous filter guided by albedo, normal and depth");
+        }
         ui.horizontal(|ui| {
             ui.label("stereo");
             ui.selectable_value(&mut s.stereo, Stereo::Mono, "mono");
@@ -1300,7 +1355,9 @@ impl ExplorerApp {
                     .text("eye separation"),
             );
         }
-        if matches!(s.backend, Backend::Octree | Backend::Volume) && s.stereo != Stereo::Mono {
+        if matches!(s.backend, Backend::Octree | Backend::Volume | Backend::Path)
+            && s.stereo != Stereo::Mono
+        {
             s.stereo = Stereo::Mono;
         }
         let mut target = self.viewport.scale.target_ms();
@@ -1397,6 +1454,15 @@ impl ExplorerApp {
                 st.depth_de_per_pixel,
                 if st.deep_f64_path { "  f64 path" } else { "" }
             ));
+            if let Some(p) = &st.path {
+                lines.push(format!(
+                    "path {} spp, noise {:.1} %, {:.2} M paths/s{}",
+                    p.samples_per_pixel,
+                    p.relative_noise * 100.0,
+                    p.paths_per_second / 1e6,
+                    if p.denoised { ", denoised" } else { "" }
+                ));
+            }
             if let Some(o) = &st.octree {
                 lines.push(format!(
                     "octree {} nodes, {:.1} MiB, {:.1} nodes/ray{}",
@@ -1607,6 +1673,7 @@ impl ExplorerApp {
             backend: match self.settings.backend {
                 Backend::Octree => Backend::Octree,
                 Backend::Volume => Backend::Volume,
+                Backend::Path => Backend::Path,
                 _ => Backend::Trace,
             },
             ..self.settings.clone()
@@ -1715,6 +1782,11 @@ impl ExplorerApp {
             software_adapter: self.settings.backend == Backend::Gpu
                 && self.software_adapter.is_some(),
             places,
+            path_spp: self
+                .viewport
+                .shown
+                .as_ref()
+                .and_then(|s| s.stats.path.map(|p| p.samples_per_pixel)),
             frame_ms: self.ui_ms,
             render_scale: self.viewport.scale.scale(),
             renderer: self

@@ -109,6 +109,8 @@ pub struct FrameLog<'a> {
     pub path_time: Option<f64>,
     /// Where the widgets were drawn, when that changed since the last line.
     pub places: Option<Vec<Place>>,
+    /// Samples per pixel of the path-traced frame on screen (none for other renderers).
+    pub path_spp: Option<u32>,
 }
 
 /// The scripted run's settings and log file.

@@ -15,6 +15,11 @@
 //! frame) took minutes to settle a Mandelbulb. Those steps are cancelled as soon as the view
 //! moves again, and their subdivision stops at its next batch.
 //!
+//! A path-traced view ([`Backend::Path`]) shows the preview tracer while it moves; once the
+//! view is still, each job adds samples to the session's accumulator for
+//! [`PATH_JOB_FRAMES`] target frame times (one pass at least) and shows the image so far,
+//! until the request's samples per pixel are reached. Moving or editing starts over.
+//!
 //! A GPU frame cannot be cancelled once submitted, so on the GPU the first refinement waits
 //! until the view has held still for [`GPU_REFINE_DELAY_MS`]: a slider dragged slowly (or a
 //! camera nudged key by key) would otherwise start a full-resolution frame between two of its
@@ -40,6 +45,12 @@ pub const OCTREE_STILL_DELAY_MS: f64 = 150.0;
 /// after each render, so the picture refines several times a second while most of the time
 /// goes to detail.
 pub const OCTREE_STILL_BUDGET: f64 = 4.0;
+
+/// A still path-traced view's job: samples for this many target frame times.
+pub const PATH_JOB_FRAMES: f64 = 8.0;
+
+/// A still path-traced view's job takes samples for at least this long, ms.
+pub const PATH_JOB_MIN_MS: f64 = 250.0;
 
 /// A frame being rendered.
 struct InFlight {
@@ -130,9 +141,10 @@ impl Viewport {
         self.in_flight.is_none()
             && self.shown.as_ref().is_some_and(|s| {
                 s.key == key
-                    && match s.octree_requests {
-                        Some(r) => r == 0,
-                        None => s.stage == self.last_stage(),
+                    && match (s.octree_requests, s.stats.path) {
+                        (Some(r), _) => r == 0,
+                        (None, Some(p)) => p.samples_per_pixel >= s.request.path.spp,
+                        (None, None) => s.stage == self.last_stage(),
                     }
             })
     }
@@ -231,6 +243,7 @@ impl Viewport {
             }
         }
         let octree = base.backend == Backend::Octree;
+        let path = base.backend == Backend::Path;
         let still_ms = self
             .still_since
             .map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64() * 1e3);
@@ -246,6 +259,15 @@ impl Viewport {
                     } else {
                         Stage::Interactive
                     }
+                } else if path {
+                    // Accumulate while still: each job adds samples for a while.
+                    if s.stats
+                        .path
+                        .is_some_and(|p| p.samples_per_pixel >= base.path.spp)
+                    {
+                        return;
+                    }
+                    Stage::Full
                 } else if s.stage == Stage::Interactive {
                     if base.backend == Backend::Gpu && still_ms < GPU_REFINE_DELAY_MS {
                         return;
@@ -284,6 +306,18 @@ impl Viewport {
             region: None,
             ..base.clone()
         };
+        if path {
+            if stage == Stage::Interactive {
+                // Moving: the preview tracer at the dynamic scale.
+                request.backend = Backend::Trace;
+                request.path = Default::default();
+            } else {
+                // Still: samples for a few target frame times per job (at least one pass),
+                // so the picture on screen refines several times a second.
+                request.path.time_limit =
+                    Some((PATH_JOB_FRAMES * self.scale.target_ms()).max(PATH_JOB_MIN_MS) / 1e3);
+            }
+        }
         if octree && stage == Stage::Full {
             // Nothing moves: a fixed, long subdivision (at least the request's own).
             request.octree.target_fps = 0.0;

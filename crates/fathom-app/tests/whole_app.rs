@@ -350,6 +350,77 @@ fn the_volume_renderer_refines_to_the_offline_cloud() {
 // Live modulation and flight paths in the window (issue 12).
 
 /// A binding read from its scene-file form.
+#[test]
+fn the_path_tracer_accumulates_while_the_view_is_still_and_moving_shows_the_preview() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut h = harness("menger");
+    settle(&mut h);
+    {
+        let app = h.state_mut();
+        app.settings.backend = Backend::Path;
+        app.settings.path.spp = 6;
+    }
+    h.key_press(egui::Key::F2);
+    h.key_press(egui::Key::F3);
+    h.step();
+    // The samples arrive in more than one frame: the picture refines on screen.
+    let mut seen = Vec::new();
+    let start = Instant::now();
+    while !h.state().settled() {
+        assert!(start.elapsed() < SETTLE, "notes: {:?}", h.state().notes());
+        h.step();
+        std::thread::sleep(Duration::from_millis(5));
+        if let Some(p) = h.state().viewport.shown.as_ref().and_then(|s| s.stats.path) {
+            if seen.last() != Some(&p.samples_per_pixel) {
+                seen.push(p.samples_per_pixel);
+            }
+        }
+    }
+    assert!(
+        seen.len() >= 2 && seen.windows(2).all(|w| w[0] < w[1]) && *seen.last().unwrap() == 6,
+        "samples on screen: {seen:?}"
+    );
+    // The accumulated viewport is the offline render of all six samples at once.
+    let (w, ht, shown) = viewport_pixels(&mut h);
+    let want = {
+        let req = RenderRequest {
+            width: w,
+            height: ht,
+            ..h.state().settings.base_request()
+        };
+        let mut s = Session::new(h.state().scene.clone()).unwrap();
+        let r = s.render(&h.state().view_camera(), &req).unwrap();
+        assert_eq!(r.stats.path.unwrap().samples_per_pixel, 6);
+        fathom_trace::post::to_rgb8(&r.frame)
+    };
+    let (max, over) = compare(w, ht, &shown, &want);
+    assert_eq!(over, 0, "largest difference {max}");
+    // Moving shows the preview tracer, then starts accumulating anew.
+    h.key_down(egui::Key::D);
+    let mut preview = false;
+    for _ in 0..40 {
+        h.step();
+        std::thread::sleep(Duration::from_millis(20));
+        preview |= h
+            .state()
+            .viewport
+            .shown
+            .as_ref()
+            .is_some_and(|s| s.stats.renderer == "trace");
+        if preview {
+            break;
+        }
+    }
+    h.key_up(egui::Key::D);
+    assert!(
+        preview,
+        "a moving path-traced view shows the preview tracer"
+    );
+    settle(&mut h);
+    let s = h.state().viewport.shown.as_ref().unwrap();
+    assert_eq!(s.stats.path.map(|p| p.samples_per_pixel), Some(6));
+}
+
 fn binding(text: &str) -> fathom_core::binding::Binding {
     ron::from_str(text).unwrap()
 }

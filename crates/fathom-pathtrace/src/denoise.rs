@@ -203,6 +203,8 @@ mod tests {
             normal: vec![[0.0, 0.0, 1.0]; n],
             depth: vec![1.0; n],
             variance: vec![0.01; n],
+            id: vec![0; n],
+            steps: vec![0; n],
             samples: 4,
         }
     }

@@ -33,6 +33,7 @@ use crate::sampler::PixelSampler;
 use crate::sampling::{Frame, power_heuristic};
 use crate::settings::{PathSettings, PathTraceError, SettingsError, default_fog};
 use crate::shared::{MIN_EPSILON, RR_MAX_SURVIVAL, RR_MIN_SURVIVAL, RR_START, SURFACE_LIFT};
+use fathom_core::frame::NO_ID;
 use fathom_core::{Evaluator, Scene, Tape, V3};
 use glam::DVec3;
 
@@ -72,6 +73,9 @@ pub struct PathSample {
     pub depth: f64,
     /// Distance evaluations spent.
     pub evaluations: u64,
+    /// Tape material (node) of the first surface, the one with the larger blend weight;
+    /// [`fathom_core::frame::NO_ID`] for misses, media and lights.
+    pub id: u32,
 }
 
 impl PathTracer {
@@ -180,7 +184,7 @@ impl PathTracer {
     }
 
     /// The material at a surface point.
-    fn material_at(&self, ev: &mut Evaluator<f64>, p: DVec3, n: DVec3) -> PbrMaterial {
+    fn material_at(&self, ev: &mut Evaluator<f64>, p: DVec3, n: DVec3) -> (PbrMaterial, u32) {
         let v = ev.eval(&self.tape, V3::new(p.x, p.y, p.z));
         let last = self.looks.len() - 1;
         let id = (v.id.max(0.0) as usize).min(last);
@@ -193,9 +197,10 @@ impl PathTracer {
         let a = self.looks[id].at(&hit);
         let w = v.blend.clamp(0.0, 1.0);
         if w > 0.0 && id2 != id {
-            a.lerp(&self.looks[id2].at(&hit), w)
+            let dominant = if w > 0.5 { id2 } else { id };
+            (a.lerp(&self.looks[id2].at(&hit), w), dominant as u32)
         } else {
-            a
+            (a, id as u32)
         }
     }
 
@@ -333,6 +338,7 @@ impl PathTracer {
             normal: DVec3::ZERO,
             depth: f64::INFINITY,
             evaluations: 0,
+            id: NO_ID,
         };
         let mut ray = Ray {
             o,
@@ -457,13 +463,13 @@ impl PathTracer {
             let n_out = normal(ev, &self.tape, p, eps);
             out.evaluations += 6;
             let wo_world = -ray.d;
-            let (n, bsdf, mat) = if ray.inside {
+            let (n, bsdf, mat, id) = if ray.inside {
                 let mat = interior_material.clone().unwrap_or_default();
-                (-n_out, Bsdf::interior(&mat), mat)
+                (-n_out, Bsdf::interior(&mat), mat, NO_ID)
             } else {
-                let mat = self.material_at(ev, p, n_out);
+                let (mat, id) = self.material_at(ev, p, n_out);
                 out.evaluations += 1;
-                (n_out, Bsdf::new(&mat), mat)
+                (n_out, Bsdf::new(&mat), mat, id)
             };
             if !ray.inside {
                 out.radiance += beta * mat.emitted();
@@ -472,6 +478,7 @@ impl PathTracer {
                 out.albedo = bsdf.albedo();
                 out.normal = n_out;
                 out.depth = m.t;
+                out.id = id;
             }
             if bounce == self.max_bounces {
                 break;

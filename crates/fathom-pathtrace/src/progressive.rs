@@ -81,6 +81,10 @@ struct Pixel {
     normal: DVec3,
     depth_sum: f64,
     hits: u32,
+    /// Material of the latest sample that hit a surface first.
+    id: Option<u32>,
+    /// Distance evaluations of every sample.
+    evaluations: u64,
 }
 
 /// A snapshot of the accumulated image and its guide buffers (row-major, top row first).
@@ -100,6 +104,11 @@ pub struct Frame {
     pub depth: Vec<f32>,
     /// Variance of the pixel's mean luminance (sample variance / n).
     pub variance: Vec<f32>,
+    /// Tape material of the first surface ([`fathom_core::frame::NO_ID`] where most samples
+    /// missed).
+    pub id: Vec<u32>,
+    /// Mean distance evaluations per sample (the whole path's, not only the camera ray's).
+    pub steps: Vec<u32>,
     /// Samples per pixel.
     pub samples: u32,
 }
@@ -198,6 +207,10 @@ impl Progressive {
                         for k in 0..n {
                             let s = tracer.sample(ev, x, y, first + k);
                             out.evaluations += s.evaluations;
+                            px.evaluations += s.evaluations;
+                            if s.id != fathom_core::frame::NO_ID {
+                                px.id = Some(s.id);
+                            }
                             let r = s.radiance;
                             if !r.is_finite() {
                                 out.dropped += 1;
@@ -257,6 +270,8 @@ impl Progressive {
             normal: Vec::with_capacity(self.pixels.len()),
             depth: Vec::with_capacity(self.pixels.len()),
             variance: Vec::with_capacity(self.pixels.len()),
+            id: Vec::with_capacity(self.pixels.len()),
+            steps: Vec::with_capacity(self.pixels.len()),
             samples: self.stats.samples_per_pixel,
         };
         for p in &self.pixels {
@@ -265,11 +280,19 @@ impl Progressive {
             f.albedo
                 .push(f3(if p.n > 0 { p.albedo / n } else { DVec3::ONE }));
             f.normal.push(f3(p.normal.normalize_or_zero()));
-            f.depth.push(if p.hits * 2 > p.n {
+            let hit = p.hits * 2 > p.n;
+            f.depth.push(if hit {
                 (p.depth_sum / p.hits as f64) as f32
             } else {
                 f32::INFINITY
             });
+            f.id.push(match p.id {
+                Some(id) if hit => id,
+                _ => fathom_core::frame::NO_ID,
+            });
+            let samples = self.stats.samples_per_pixel.max(1) as u64;
+            f.steps
+                .push((p.evaluations / samples).min(u32::MAX as u64) as u32);
             f.variance.push(if p.n > 1 {
                 (p.m2_l / (p.n - 1) as f64 / n) as f32
             } else {

@@ -29,6 +29,8 @@ pub enum RenderError {
     Octree(#[from] OctreeError),
     #[error(transparent)]
     Volume(#[from] fathom_volume::VolumeError),
+    #[error(transparent)]
+    Path(fathom_pathtrace::PathTraceError),
     /// The frame was abandoned through its [`crate::CancelToken`]; the session is unchanged.
     #[error("the render was cancelled")]
     Cancelled,
@@ -39,6 +41,15 @@ pub enum RenderError {
         "a deep eye needs a finite trailing part and a positive scale; got ({x}, {y}, {z}) and scale {scale}"
     )]
     DeepEye { x: f64, y: f64, z: f64, scale: f64 },
+}
+
+impl From<fathom_pathtrace::PathTraceError> for RenderError {
+    fn from(e: fathom_pathtrace::PathTraceError) -> RenderError {
+        match e {
+            fathom_pathtrace::PathTraceError::Cancelled => RenderError::Cancelled,
+            e => RenderError::Path(e),
+        }
+    }
 }
 
 impl From<TraceError> for RenderError {

@@ -12,7 +12,8 @@
 //! - [`zoom`]: the octree's zoom loop with its precision guard;
 //! - [`compare`]: an octree frame against the sphere tracer's (SSIM, silhouette IoU, colour);
 //! - [`flight`]: a scene's flight path rendered frame by frame (`fathom render --path`);
-//! - `gpu`, `octree`: the two backends with state of their own.
+//! - `gpu`, `octree`, `volume`, `path`: the backends with state of their own (the path
+//!   tracer's is its accumulator, which refines a still view across renders).
 //!
 //! Regions (a rectangle of a larger image): the CPU tracer renders only the tiles a region
 //! needs, bit-identical to the same pixels of the whole render (SSAO and prepass borders
@@ -25,6 +26,7 @@ pub mod error;
 pub mod flight;
 mod gpu;
 mod octree;
+mod path;
 pub mod request;
 pub mod session;
 pub mod stats;
@@ -33,7 +35,7 @@ pub mod zoom;
 
 pub use control::{CancelToken, Control, Progress};
 pub use error::RenderError;
-pub use request::{Backend, OctreeSettings, RenderRequest, RequestError, TracerRule};
+pub use request::{Backend, OctreeSettings, PathRequest, RenderRequest, RequestError, TracerRule};
 pub use session::{Counters, Rendered, SceneChange, Session};
 pub use stats::Stats;
 

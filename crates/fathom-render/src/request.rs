@@ -25,6 +25,10 @@ pub enum Backend {
     /// The scene as a cloud: its interior sampled into a density grid and path-traced by
     /// fathom-volume (settings in [`VolumeSettings`]).
     Volume,
+    /// The progressive path tracer of fathom-pathtrace (settings in [`PathRequest`]): global
+    /// illumination, soft shadows, depth of field; a session keeps accumulating samples
+    /// while the view, the scene and the settings stay the same.
+    Path,
 }
 
 impl Backend {
@@ -35,6 +39,7 @@ impl Backend {
             Backend::Gpu => "gpu",
             Backend::Octree => "svo",
             Backend::Volume => "volume",
+            Backend::Path => "path",
         }
     }
 }
@@ -149,6 +154,46 @@ impl Default for VolumeSettings {
     }
 }
 
+/// Most samples per pixel a path-traced frame may ask for.
+pub const MAX_PATH_SPP: u32 = 1 << 20;
+
+/// Settings of the path-tracing backend ([`Backend::Path`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PathRequest {
+    /// Samples per pixel the frame is to have, [1, 2^20]. A session that already holds the
+    /// same view with fewer samples adds only the difference (how a window refines).
+    pub spp: u32,
+    /// Stop adding samples after this many seconds even if `spp` is not reached,
+    /// (0, 1e6]; at least one pass is always made.
+    pub time_limit: Option<f64>,
+    /// Surface and fog interactions a path may have, [1, 256].
+    pub max_bounces: u32,
+    /// Lens radius in world units for depth of field, [0, 1e6] (0: pinhole).
+    pub aperture: f64,
+    /// Distance to the plane in focus, [1e-9, 1e12]; absent: the camera's target.
+    pub focus_distance: Option<f64>,
+    /// Run the edge-aware à-trous denoiser over the result (guided by albedo, normal,
+    /// depth).
+    pub denoise: bool,
+    /// Sampler seed (independent noise for another seed; equal seeds give equal images).
+    pub seed: u32,
+}
+
+impl Default for PathRequest {
+    fn default() -> Self {
+        PathRequest {
+            spp: 64,
+            time_limit: None,
+            max_bounces: 8,
+            aperture: 0.0,
+            focus_distance: None,
+            denoise: false,
+            seed: 0,
+        }
+    }
+}
+
 /// What to render: one frame, or one region of it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -180,6 +225,8 @@ pub struct RenderRequest {
     pub octree: OctreeSettings,
     /// Volume settings (used by [`Backend::Volume`]).
     pub volume: VolumeSettings,
+    /// Path-tracing settings (used by [`Backend::Path`]).
+    pub path: PathRequest,
 }
 
 impl Default for RenderRequest {
@@ -199,6 +246,7 @@ impl Default for RenderRequest {
             region: None,
             octree: OctreeSettings::default(),
             volume: VolumeSettings::default(),
+            path: PathRequest::default(),
         }
     }
 }
@@ -229,6 +277,18 @@ pub enum RequestError {
         value: f64,
         range: &'static str,
     },
+    #[error(
+        "the path tracer renders one mono view with its own antialiasing: stereo, \
+         supersampling, SSAO and geometry-only frames are not supported with it (use more \
+         samples per pixel instead of supersampling)"
+    )]
+    PathView,
+    #[error("path {name} = {value} is out of range {range}")]
+    PathSetting {
+        name: &'static str,
+        value: f64,
+        range: &'static str,
+    },
     #[error("octree settle_frames = {0} is out of range [0, 100000]")]
     SettleFrames(usize),
     #[error(transparent)]
@@ -236,6 +296,55 @@ pub enum RequestError {
 }
 
 impl RenderRequest {
+    /// Checks the path tracer's view and settings.
+    fn validate_path(&self) -> Result<(), RequestError> {
+        if self.projection != Projection::Mono
+            || self.supersample != 1
+            || self.ssao != 0.0
+            || self.geometry_only
+        {
+            return Err(RequestError::PathView);
+        }
+        let p = &self.path;
+        let check = |name, value: f64, ok: bool, range| {
+            if ok && value.is_finite() {
+                Ok(())
+            } else {
+                Err(RequestError::PathSetting { name, value, range })
+            }
+        };
+        check(
+            "spp",
+            p.spp as f64,
+            (1..=MAX_PATH_SPP).contains(&p.spp),
+            "[1, 1048576]",
+        )?;
+        if let Some(t) = p.time_limit {
+            check("time_limit", t, t > 0.0 && t <= 1e6, "(0, 1e6] seconds")?;
+        }
+        check(
+            "max_bounces",
+            p.max_bounces as f64,
+            (1..=256).contains(&p.max_bounces),
+            "[1, 256]",
+        )?;
+        check(
+            "aperture",
+            p.aperture,
+            (0.0..=1e6).contains(&p.aperture),
+            "[0, 1e6]",
+        )?;
+        if let Some(f) = p.focus_distance {
+            check(
+                "focus_distance",
+                f,
+                (1e-9..=1e12).contains(&f),
+                "[1e-9, 1e12]",
+            )?;
+        }
+        Ok(())
+    }
+
     /// The CPU tracer's options for this request (also the size limits every backend obeys).
     pub fn trace_options(&self) -> Options {
         Options {
@@ -313,6 +422,9 @@ impl RenderRequest {
                 (1..=4096).contains(&v.spp),
                 "[1, 4096]",
             )?;
+        }
+        if self.backend == Backend::Path {
+            self.validate_path()?;
         }
         if self.backend == Backend::Octree {
             if self.projection != Projection::Mono {

@@ -55,6 +55,8 @@ pub struct Counters {
     pub octrees_built: u64,
     /// Density grids sampled for the volume backend (each scene or volume-setting change).
     pub volumes_sampled: u64,
+    /// Path-tracing accumulators started (each change of view, scene or path settings).
+    pub path_accumulators: u64,
 }
 
 /// A finished frame and what it cost.
@@ -77,6 +79,7 @@ pub struct Session {
     gpu: Option<GpuBackend>,
     octree: Option<OctreeBackend>,
     volume: Option<crate::volume::VolumeBackend>,
+    path: Option<crate::path::PathBackend>,
 }
 
 impl Session {
@@ -97,6 +100,7 @@ impl Session {
             gpu: None,
             octree: None,
             volume: None,
+            path: None,
         })
     }
 
@@ -256,6 +260,20 @@ impl Session {
                 )?;
                 let pool = pool(&mut self.pool, req.threads)?;
                 vb.render(camera, req, control, pool)?
+            }
+            Backend::Path => {
+                let key = self.shading_generation;
+                let pb = crate::path::PathBackend::get(
+                    &mut self.path,
+                    &scene,
+                    &self.tape,
+                    key,
+                    camera,
+                    req,
+                    &mut self.counters,
+                )?;
+                let pool = pool(&mut self.pool, req.threads)?;
+                pb.render(req, control, pool)?
             }
         };
         out.stats.ms.total = start.elapsed().as_secs_f64() * 1e3;

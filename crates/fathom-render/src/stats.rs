@@ -40,6 +40,24 @@ pub struct OctreeStats {
     pub arena_bytes: u64,
 }
 
+/// Path-tracer figures of the frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PathStats {
+    /// Samples per pixel accumulated in the image returned.
+    pub samples_per_pixel: u32,
+    /// Samples per pixel this render added (0 when the view already had enough).
+    pub samples_added: u32,
+    /// Camera paths per second over all of the accumulator's passes.
+    pub paths_per_second: f64,
+    /// Estimated remaining noise: the RMS standard error of the pixels' mean luminance,
+    /// relative to the image's mean luminance (before denoising).
+    pub relative_noise: f64,
+    /// Paths whose radiance was NaN or infinite, counted and left out of the pixels.
+    pub dropped_non_finite: u64,
+    /// Whether the colour is the denoiser's output.
+    pub denoised: bool,
+}
+
 /// What one frame cost and found.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Stats {
@@ -65,6 +83,7 @@ pub struct Stats {
     pub trace_steps_per_pixel: f64,
     pub ms: Timings,
     pub octree: Option<OctreeStats>,
+    pub path: Option<PathStats>,
     /// Why the frame was drawn differently from what was asked (a GPU view too deep for f32
     /// drawn by the CPU tracer), if it was.
     pub note: Option<String>,
@@ -137,6 +156,12 @@ mod tests {
         };
         assert_eq!(keys(&cpu), keys(&gpu));
         assert_eq!(keys(&cpu), keys(&svo));
+        let path = Stats {
+            renderer: "path",
+            path: Some(PathStats::default()),
+            ..Stats::default()
+        };
+        assert_eq!(keys(&cpu), keys(&path));
         // The keys `fathom render --stats` wrote before the render layer are all still there.
         let j = cpu.to_json();
         for k in [

@@ -8,7 +8,7 @@ use clap::{Args, ValueEnum};
 use fathom_core::camera::MAX_EYE_SEPARATION;
 use fathom_core::scene::Scene;
 use fathom_core::{Projection, presets, scene_file};
-use fathom_render::{Backend, Control, Progress, RenderRequest, Session, TracerRule};
+use fathom_render::{Backend, Control, PathRequest, Progress, RenderRequest, Session, TracerRule};
 use fathom_trace::output;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -35,6 +35,8 @@ pub enum TracerKind {
 ///   fathom render --preset menger --stereo sbs --size 640x480 -o pair.png
 ///   fathom render --preset mandelbulb -o layers.exr          colour, mask, depth, normal, id
 ///   fathom render --preset mandelbulb --bit-depth 16 -o deep.png
+///   fathom render --preset menger --integrator path --spp 256 --denoise -o lit.png
+///   fathom render --preset mandelbulb --integrator path --time 30s --aperture 0.02 -o dof.png
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 -o dive/
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 \
 ///       -o shots/dive-####.exr --camera-path shots/dive.glb
@@ -137,6 +139,42 @@ pub struct RenderArgs {
     /// glTF cannot animate it).
     #[arg(long, requires = "path")]
     pub camera_path: Option<PathBuf>,
+    /// How light is computed: `preview`, the fast sphere tracer with Blinn-Phong shading
+    /// (the default, and what --renderer chooses among), or `path`, the progressive path
+    /// tracer (global illumination, soft shadows, glossy and glass materials, depth of field;
+    /// CPU only so far). `--integrator path` takes --spp or --time, --bounces, --aperture,
+    /// --focus-distance and --denoise.
+    #[arg(long, value_enum, default_value = "preview")]
+    pub integrator: IntegratorKind,
+    /// With --integrator path: samples per pixel, [1, 1048576]; the noise falls as 1/sqrt(spp)
+    /// (64 is a clean preview, 1024 a print) [default: 64, or with --time as many as fit].
+    /// With --time, the most samples to take.
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// With --integrator path: take samples for this long instead of a count, e.g. 30s, 2m,
+    /// 1.5 (seconds); at least one sample per pixel is always taken.
+    #[arg(long, value_parser = parse_duration)]
+    pub time: Option<f64>,
+    /// With --integrator path: surface and fog interactions per path, [1, 256] (glass and
+    /// deep crevices need more).
+    #[arg(long, default_value_t = 8)]
+    pub bounces: u32,
+    /// With --integrator path: lens radius in scene units for depth of field, [0, 1e6]
+    /// (0: everything sharp).
+    #[arg(long, default_value_t = 0.0)]
+    pub aperture: f64,
+    /// With --integrator path: distance from the eye to the plane in focus [default: the
+    /// distance to the camera's target].
+    #[arg(long)]
+    pub focus_distance: Option<f64>,
+    /// With --integrator path: filter the noise away, guided by the first hit's albedo,
+    /// normal and depth (`atrous`, the default: edge-aware à-trous wavelets; `oidn`: Intel
+    /// Open Image Denoise, when built with it).
+    #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "atrous")]
+    pub denoise: Option<DenoiserKind>,
+    /// With --integrator path: the sampler's seed (another seed, independent noise).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
     /// Render farm: cut the still into N tiles, units of a farm job in the directory -o DIR
     /// (with --shard, only that shard's tiles; else all, or the Slurm array task's share).
     #[arg(long, value_name = "N", conflicts_with = "path")]
@@ -161,6 +199,65 @@ pub enum RendererKind {
     /// The scene's interior as a cloud, path-traced (fathom-volume at its session defaults;
     /// `fathom volume` has every setting). --supersample S renders 2 S^2 samples per pixel.
     Volume,
+}
+
+/// How `fathom render` computes light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorKind {
+    /// Sphere tracing with Blinn-Phong shading, soft shadows and ambient occlusion: fast.
+    Preview,
+    /// Progressive Monte Carlo path tracing: global illumination, materials, depth of field.
+    Path,
+}
+
+/// The denoiser of `--denoise`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum DenoiserKind {
+    /// fathom's edge-aware à-trous wavelet filter.
+    Atrous,
+    /// Intel Open Image Denoise.
+    Oidn,
+}
+
+/// Parses a duration: `30s`, `2m`, `1h`, `250ms` or plain seconds (`1.5`).
+pub fn parse_duration(s: &str) -> Result<f64, String> {
+    let t = s.trim();
+    let (num, unit) = match t.find(|c: char| c.is_ascii_alphabetic()) {
+        Some(i) => t.split_at(i),
+        None => (t, "s"),
+    };
+    let k = match unit {
+        "ms" => 1e-3,
+        "s" => 1.0,
+        "m" | "min" => 60.0,
+        "h" => 3600.0,
+        _ => {
+            return Err(format!(
+                "`{s}`: the unit `{unit}` is not one of ms, s, m, h (e.g. 30s, 2m)"
+            ));
+        }
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a duration (e.g. 30s, 2m, 1.5)"))?;
+    let secs = v * k;
+    if !(secs.is_finite() && secs > 0.0 && secs <= 1e6) {
+        return Err(format!("`{s}` is out of range (0, 1e6] seconds"));
+    }
+    Ok(secs)
+}
+
+impl RendererKind {
+    /// The flag's value.
+    fn name(self) -> &'static str {
+        match self {
+            RendererKind::Trace => "trace",
+            RendererKind::Gpu => "gpu",
+            RendererKind::Svo => "svo",
+            RendererKind::Volume => "volume",
+        }
+    }
 }
 
 /// Stereo layout.
@@ -231,6 +328,42 @@ impl RenderArgs {
 
     /// The backend the flags choose.
     fn backend(&self) -> Result<Backend, String> {
+        if self.integrator == IntegratorKind::Path {
+            if self.gpu || self.renderer == RendererKind::Gpu {
+                return Err(
+                    "--integrator path runs on the CPU only so far (the GPU path \
+                     tracer is not built yet); leave out --gpu"
+                        .into(),
+                );
+            }
+            if self.renderer != RendererKind::Trace {
+                return Err(format!(
+                    "--integrator path and --renderer {} choose two renderers; pick one",
+                    self.renderer.name()
+                ));
+            }
+            if self.denoise == Some(DenoiserKind::Oidn) {
+                return Err(
+                    "--denoise oidn: this build has no Intel Open Image Denoise \
+                     (it is not packaged for this system); --denoise (à-trous) is built in"
+                        .into(),
+                );
+            }
+            return Ok(Backend::Path);
+        }
+        for (given, flag) in [
+            (self.spp.is_some(), "--spp"),
+            (self.time.is_some(), "--time"),
+            (self.denoise.is_some(), "--denoise"),
+            (self.aperture != 0.0, "--aperture"),
+            (self.focus_distance.is_some(), "--focus-distance"),
+        ] {
+            if given {
+                return Err(format!(
+                    "{flag} belongs to the path tracer; add --integrator path"
+                ));
+            }
+        }
         Ok(match (self.gpu, self.renderer) {
             (true, RendererKind::Svo) => {
                 return Err("--gpu and --renderer svo choose two renderers; pick one".into());
@@ -262,6 +395,19 @@ impl RenderArgs {
             ssao: self.ssao,
             backend,
             threads: self.threads,
+            path: PathRequest {
+                spp: match (self.spp, self.time) {
+                    (Some(n), _) => n,
+                    (None, Some(_)) => fathom_render::request::MAX_PATH_SPP,
+                    (None, None) => DEFAULT_SPP,
+                },
+                time_limit: self.time,
+                max_bounces: self.bounces,
+                aperture: self.aperture,
+                focus_distance: self.focus_distance,
+                denoise: self.denoise.is_some(),
+                seed: self.seed,
+            },
             ..RenderRequest::default()
         };
         req.validate().map_err(|e| e.to_string())?;
@@ -296,6 +442,85 @@ fn progress_bar(quiet: bool) -> Result<indicatif::ProgressBar, String> {
     Ok(b)
 }
 
+/// Samples per pixel of `--integrator path` without --spp or --time.
+pub const DEFAULT_SPP: u32 = 64;
+
+/// Path tracing in passes of whole samples per pixel, so the progress bar can say how many
+/// samples are done, at what rate, and how much noise is left; the denoiser (if asked) runs
+/// once at the end. Returns the final frame with statistics of the whole render.
+fn render_path(
+    session: &mut Session,
+    camera: &fathom_core::Camera,
+    req: &RenderRequest,
+    quiet: bool,
+) -> Result<fathom_render::Rendered, String> {
+    let start = Instant::now();
+    let target = req.path.spp;
+    let limit = req.path.time_limit;
+    let bar = if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let b = indicatif::ProgressBar::new(match limit {
+            Some(t) => (t * 1e3) as u64,
+            None => target as u64,
+        });
+        let template = match limit {
+            Some(_) => "{spinner} path tracing [{bar:40}] {elapsed}/{duration} {msg}",
+            None => "{spinner} path tracing [{bar:40}] {pos}/{len} spp {elapsed}, {eta} left {msg}",
+        };
+        b.set_style(
+            indicatif::ProgressStyle::with_template(template)
+                .map_err(|e| e.to_string())?
+                .progress_chars("=> "),
+        );
+        b.enable_steady_tick(std::time::Duration::from_millis(200));
+        b
+    };
+    let mut pass = req.clone();
+    pass.path.denoise = false;
+    pass.path.time_limit = None;
+    let mut spp = 0u32;
+    // Samples per call: one at first, then about a quarter of a second's worth, so small
+    // images do not spend their time between passes.
+    let mut step = 1u32;
+    while spp < target && limit.is_none_or(|t| spp == 0 || start.elapsed().as_secs_f64() < t) {
+        let t0 = Instant::now();
+        pass.path.spp = spp.saturating_add(step).min(target);
+        let r = session.render(camera, &pass).map_err(|e| e.to_string())?;
+        let p = r.stats.path.expect("the path backend reports its samples");
+        let added = p.samples_per_pixel - spp;
+        spp = p.samples_per_pixel;
+        let per_sample = t0.elapsed().as_secs_f64() / added.max(1) as f64;
+        step = ((0.25 / per_sample.max(1e-6)) as u32).clamp(1, 1024);
+        if let Some(t) = limit {
+            let left = (t - start.elapsed().as_secs_f64()).max(0.0);
+            step = step.min(((left / per_sample.max(1e-6)) as u32).max(1));
+        }
+        bar.set_position(match limit {
+            Some(_) => (start.elapsed().as_secs_f64() * 1e3) as u64,
+            None => spp as u64,
+        });
+        bar.set_message(format!(
+            "{}{:.2} M paths/s, noise {:.1} %",
+            if limit.is_some() {
+                format!("{spp} spp, ")
+            } else {
+                String::new()
+            },
+            p.paths_per_second / 1e6,
+            p.relative_noise * 100.0
+        ));
+    }
+    bar.finish_and_clear();
+    let mut last = req.clone();
+    last.path.spp = spp;
+    last.path.time_limit = None;
+    let mut r = session.render(camera, &last).map_err(|e| e.to_string())?;
+    r.stats.primary_rays = spp as u64 * req.width as u64 * req.height as u64;
+    r.stats.ms.trace_and_shade = start.elapsed().as_secs_f64() * 1e3 - r.stats.ms.post;
+    Ok(r)
+}
+
 /// The image size of `fathom render` without --size.
 pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
 
@@ -316,6 +541,7 @@ fn size_from_fract(a: &mut RenderArgs) -> Result<(), String> {
 }
 
 pub fn run(mut a: RenderArgs) -> Result<(), String> {
+    let start = Instant::now();
     size_from_fract(&mut a)?;
     if a.shard.is_some() || a.tiles.is_some() {
         return crate::cmd_farm::render_shard(&a);
@@ -346,9 +572,13 @@ pub fn run(mut a: RenderArgs) -> Result<(), String> {
         cancel: None,
         progress: Some(&progress),
     };
-    let r = session
-        .render_with(&camera, &req, &control)
-        .map_err(|e| e.to_string())?;
+    let r = if req.backend == Backend::Path {
+        render_path(&mut session, &camera, &req, a.quiet)?
+    } else {
+        session
+            .render_with(&camera, &req, &control)
+            .map_err(|e| e.to_string())?
+    };
     bar.finish_and_clear();
     if let Some(note) = &r.stats.note {
         eprintln!("fathom: note: {note}");
@@ -374,13 +604,27 @@ pub fn run(mut a: RenderArgs) -> Result<(), String> {
                 o.settle_frames, o.nodes, o.nodes_per_ray
             );
         }
+        if let Some(p) = &r.stats.path {
+            eprintln!(
+                "path: {} spp, {:.2} M paths/s, noise {:.1} %{}{}",
+                p.samples_per_pixel,
+                p.paths_per_second / 1e6,
+                p.relative_noise * 100.0,
+                if p.denoised { " before denoising" } else { "" },
+                if p.dropped_non_finite > 0 {
+                    format!(", {} non-finite paths dropped", p.dropped_non_finite)
+                } else {
+                    String::new()
+                }
+            );
+        }
         let shown = std::fs::canonicalize(&a.output).unwrap_or(a.output.clone());
         eprintln!(
             "wrote {} ({}x{}) in {:.0} ms",
             shown.display(),
             frame.width,
             frame.height,
-            r.stats.ms.total
+            start.elapsed().as_secs_f64() * 1e3
         );
     }
     Ok(())
@@ -598,5 +842,106 @@ mod tests {
             "the bulb should cover the centre, not the corner"
         );
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn the_path_integrator_writes_a_lit_picture_with_its_statistics() {
+        let dir = std::env::temp_dir().join(format!("fathom-path-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let out = dir.join("p.png");
+        let stats = dir.join("p.json");
+        let cli = <Cli as clap::Parser>::parse_from([
+            "t",
+            "--preset",
+            "menger",
+            "--integrator",
+            "path",
+            "--spp",
+            "3",
+            "--denoise",
+            "--size",
+            "40x30",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
+        run(cli.r).unwrap();
+        let img = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (40, 30));
+        let mut levels: Vec<u8> = img.pixels().map(|p| p.0[1]).collect();
+        levels.sort_unstable();
+        levels.dedup();
+        assert!(levels.len() > 20, "a picture, not a flat image: {levels:?}");
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(s["renderer"], "path");
+        assert_eq!(s["path"]["samples_per_pixel"], 3);
+        assert_eq!(s["path"]["denoised"], true);
+        assert_eq!(s["primary_rays"], 3 * 40 * 30);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn path_flags_without_the_path_integrator_or_with_the_gpu_explain_themselves() {
+        let parse = |args: &[&str]| {
+            let mut v = vec!["t"];
+            v.extend_from_slice(args);
+            <Cli as clap::Parser>::try_parse_from(v).map(|c| c.r)
+        };
+        for flag in [
+            &["--spp", "4"][..],
+            &["--time", "3s"],
+            &["--denoise"],
+            &["--aperture", "0.1"],
+        ] {
+            let e = parse(flag).unwrap().request().unwrap_err();
+            assert!(e.contains("--integrator path"), "{flag:?}: {e}");
+        }
+        let e = parse(&["--integrator", "path", "--gpu"])
+            .unwrap()
+            .request()
+            .unwrap_err();
+        assert!(e.contains("CPU only") && e.contains("--gpu"), "{e}");
+        let e = parse(&["--integrator", "path", "--renderer", "svo"])
+            .unwrap()
+            .request()
+            .unwrap_err();
+        assert!(e.contains("pick one"), "{e}");
+        let e = parse(&["--integrator", "path", "--denoise", "oidn"])
+            .unwrap()
+            .request()
+            .unwrap_err();
+        assert!(e.contains("Open Image Denoise"), "{e}");
+        let e = parse(&["--integrator", "path", "--spp", "0"])
+            .unwrap()
+            .request()
+            .unwrap_err();
+        assert!(e.contains("spp") && e.contains("[1, 1048576]"), "{e}");
+        let e = parse(&["--integrator", "path", "--stereo", "sbs"])
+            .unwrap()
+            .request()
+            .unwrap_err();
+        assert!(e.contains("stereo"), "{e}");
+        // --time alone means as many samples as fit.
+        let r = parse(&["--integrator", "path", "--time", "2m"])
+            .unwrap()
+            .request()
+            .unwrap();
+        assert_eq!(r.path.time_limit, Some(120.0));
+        assert_eq!(r.path.spp, fathom_render::request::MAX_PATH_SPP);
+    }
+
+    #[test]
+    fn durations_parse_with_units_and_refuse_nonsense() {
+        assert_eq!(parse_duration("30s"), Ok(30.0));
+        assert_eq!(parse_duration("1.5"), Ok(1.5));
+        assert_eq!(parse_duration("2m"), Ok(120.0));
+        assert_eq!(parse_duration("250ms"), Ok(0.25));
+        assert_eq!(parse_duration("1h"), Ok(3600.0));
+        for bad in ["", "s", "-3s", "0", "3 weeks", "nan", "1e9h", "5x"] {
+            assert!(parse_duration(bad).is_err(), "{bad}");
+        }
     }
 }

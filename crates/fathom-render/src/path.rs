@@ -1,0 +1,369 @@
+//! The path-tracing backend of a session: fathom-pathtrace's progressive path tracer kept
+//! between frames. While the view (camera, size), the scene's shading and the path settings
+//! stay the same, each render adds samples to the same accumulator until the request's `spp`
+//! (or its time limit) is reached, so a window refines a still view and a command line can
+//! show the image's noise falling; anything else starts a new accumulator. A cancelled
+//! render keeps the samples of the passes that finished.
+//!
+//! The frame carries the mean radiance (or the denoised one), the first hit's depth, normal
+//! and material id, and the mean distance evaluations per path as its steps; fog is part of
+//! the path tracer's light transport, so the session's post effects do not apply it again.
+
+use crate::control::Control;
+use crate::request::{PathRequest, RenderRequest};
+use crate::session::{Counters, Rendered};
+use crate::stats::{PathStats, Stats, Timings};
+use fathom_core::frame::{Frame, NO_ID};
+use fathom_core::{Camera, Scene, Tape};
+use fathom_pathtrace::{DenoiseSettings, PathSettings, PathTracer, Progressive};
+use std::time::Instant;
+
+/// What an accumulator's samples depend on: a change in any of these starts over.
+#[derive(Clone, Debug, PartialEq)]
+struct AccumulatorKey {
+    shading_generation: u64,
+    camera: Camera,
+    width: u32,
+    height: u32,
+    fog: Option<f64>,
+    max_bounces: u32,
+    aperture: f64,
+    focus_distance: Option<f64>,
+    seed: u32,
+}
+
+/// The accumulated image of one view.
+pub(crate) struct PathBackend {
+    key: AccumulatorKey,
+    progressive: Progressive,
+}
+
+impl PathBackend {
+    /// The accumulator for this view of `scene` (shading generation `generation`), a new one
+    /// when anything its samples depend on changed.
+    pub fn get<'a>(
+        slot: &'a mut Option<PathBackend>,
+        scene: &Scene,
+        tape: &Tape,
+        generation: u64,
+        camera: &Camera,
+        req: &RenderRequest,
+        counters: &mut Counters,
+    ) -> Result<&'a mut PathBackend, fathom_pathtrace::PathTraceError> {
+        let p = &req.path;
+        let key = AccumulatorKey {
+            shading_generation: generation,
+            camera: camera.clone(),
+            width: req.width,
+            height: req.height,
+            fog: req.fog,
+            max_bounces: p.max_bounces,
+            aperture: p.aperture,
+            focus_distance: p.focus_distance,
+            seed: p.seed,
+        };
+        if slot.as_ref().is_none_or(|b| b.key != key) {
+            *slot = None;
+            let mut viewed = scene.clone();
+            viewed.camera = camera.clone();
+            let tracer = PathTracer::new(&viewed, tape, settings(req.width, req.height, p))?;
+            counters.path_accumulators += 1;
+            *slot = Some(PathBackend {
+                key,
+                progressive: Progressive::new(tracer),
+            });
+        }
+        Ok(slot.as_mut().expect("made above"))
+    }
+
+    /// Samples per pixel accumulated so far.
+    pub fn samples(&self) -> u32 {
+        self.progressive.stats().samples_per_pixel
+    }
+
+    /// Adds samples up to the request's `spp` (at least one pass when a time limit is set
+    /// and the target is not yet reached), then returns the image.
+    pub fn render(
+        &mut self,
+        req: &RenderRequest,
+        control: &Control,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Result<Rendered, crate::RenderError> {
+        let t0 = Instant::now();
+        let p = &req.path;
+        let first = self.samples();
+        let wanted = p.spp.saturating_sub(first);
+        let passes_done = std::sync::atomic::AtomicUsize::new(0);
+        let report = |tiles_done: usize, tiles: usize| match p.time_limit {
+            Some(limit) => control.report(
+                (t0.elapsed().as_secs_f64() * 1e3) as usize,
+                (limit * 1e3).max(1.0) as usize,
+            ),
+            None => control.report(
+                passes_done.load(std::sync::atomic::Ordering::Relaxed) * tiles + tiles_done,
+                wanted as usize * tiles,
+            ),
+        };
+        let pt_control = fathom_pathtrace::Control {
+            cancel: control.cancel.map(|c| c.flag()),
+            progress: Some(&report),
+        };
+        let run = |prog: &mut Progressive| -> Result<(), crate::RenderError> {
+            for pass in 0..wanted {
+                if pass > 0
+                    && p.time_limit
+                        .is_some_and(|limit| t0.elapsed().as_secs_f64() >= limit)
+                {
+                    break;
+                }
+                match prog.add_samples(1, &pt_control) {
+                    Ok(()) => {}
+                    Err(fathom_pathtrace::PathTraceError::Cancelled) => {
+                        return Err(crate::RenderError::Cancelled);
+                    }
+                    Err(e) => return Err(e.into()),
+                }
+                passes_done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
+            Ok(())
+        };
+        match pool {
+            Some(pool) => pool.install(|| run(&mut self.progressive))?,
+            None => run(&mut self.progressive)?,
+        }
+        let traced_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = Instant::now();
+        let image = self.progressive.frame();
+        let noise = image.relative_noise();
+        let colour = if p.denoise {
+            match pool {
+                Some(pool) => {
+                    pool.install(|| fathom_pathtrace::denoise(&image, &DenoiseSettings::default()))
+                }
+                None => fathom_pathtrace::denoise(&image, &DenoiseSettings::default()),
+            }
+        } else {
+            image.colour.clone()
+        };
+        let whole = Frame {
+            width: image.width,
+            height: image.height,
+            colour,
+            depth: image.depth,
+            normal: image.normal,
+            id: image.id,
+            steps: image.steps,
+        };
+        let frame = match req.region {
+            Some(r) => whole.crop(r),
+            None => whole,
+        };
+        let st = self.progressive.stats();
+        let added = (self.samples() - first) as u64;
+        let stats = Stats {
+            renderer: "path",
+            width: frame.width,
+            height: frame.height,
+            primary_rays: added * req.width as u64 * req.height as u64,
+            hits: frame.id.iter().filter(|&&id| id != NO_ID).count() as u64,
+            ms: Timings {
+                trace_and_shade: traced_ms,
+                post: t1.elapsed().as_secs_f64() * 1e3,
+                ..Timings::default()
+            },
+            path: Some(PathStats {
+                samples_per_pixel: st.samples_per_pixel,
+                samples_added: added as u32,
+                paths_per_second: st.paths_per_second(),
+                relative_noise: noise,
+                dropped_non_finite: st.dropped_non_finite,
+                denoised: p.denoise,
+            }),
+            ..Stats::default()
+        };
+        control.report(1, 1);
+        Ok(Rendered { frame, stats })
+    }
+}
+
+/// The path tracer's settings for a `width` x `height` image of this request.
+fn settings(width: u32, height: u32, p: &PathRequest) -> PathSettings {
+    PathSettings {
+        max_bounces: p.max_bounces,
+        aperture: p.aperture,
+        focus_distance: p.focus_distance,
+        seed: p.seed,
+        ..PathSettings::new(width, height)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::control::{CancelToken, Control};
+    use crate::request::{Backend, RenderRequest, RequestError};
+    use crate::{RenderError, Session};
+    use fathom_core::frame::{NO_ID, Rect};
+    use fathom_core::{Projection, presets};
+
+    fn request(w: u32, h: u32, spp: u32, threads: usize) -> RenderRequest {
+        let mut r = RenderRequest {
+            width: w,
+            height: h,
+            backend: Backend::Path,
+            threads: Some(threads),
+            ..RenderRequest::default()
+        };
+        r.path.spp = spp;
+        r
+    }
+
+    /// Renders of the same view add samples to one accumulator; the image after 2 + 2 samples
+    /// is the image of 4 samples in one go, on one thread or two; a new view starts over.
+    #[test]
+    fn renders_of_one_view_accumulate_and_equal_one_render_of_all_their_samples() {
+        let scene = presets::load("menger").unwrap();
+        let cam = scene.camera.clone();
+        let mut stepwise = Session::new(scene.clone()).unwrap();
+        let two = stepwise.render(&cam, &request(20, 14, 2, 2)).unwrap();
+        let p = two.stats.path.unwrap();
+        assert_eq!((p.samples_per_pixel, p.samples_added), (2, 2));
+        let four = stepwise.render(&cam, &request(20, 14, 4, 2)).unwrap();
+        let p = four.stats.path.unwrap();
+        assert_eq!((p.samples_per_pixel, p.samples_added), (4, 2));
+        // Asking for fewer than it has adds nothing and returns the same image.
+        let again = stepwise.render(&cam, &request(20, 14, 3, 2)).unwrap();
+        assert_eq!(again.stats.path.unwrap().samples_added, 0);
+        assert!(again.frame == four.frame);
+        assert_eq!(stepwise.counters().path_accumulators, 1);
+
+        let mut at_once = Session::new(scene.clone()).unwrap();
+        let one_thread = at_once.render(&cam, &request(20, 14, 4, 1)).unwrap();
+        assert!(
+            one_thread.frame == four.frame,
+            "2 + 2 samples on two threads differ from 4 samples on one"
+        );
+        assert_eq!(four.stats.renderer, "path");
+        let hits = four.frame.id.iter().filter(|&&id| id != NO_ID).count();
+        assert!(
+            hits > 0 && hits < four.frame.len(),
+            "the sponge covers part of the frame: {hits}"
+        );
+
+        // Another view starts over.
+        let mut moved = cam.clone();
+        moved.eye.x += 0.1;
+        let r = stepwise.render(&moved, &request(20, 14, 1, 2)).unwrap();
+        assert_eq!(r.stats.path.unwrap().samples_per_pixel, 1);
+        assert_eq!(stepwise.counters().path_accumulators, 2);
+    }
+
+    /// A region is the crop of the whole image (the sampler is per pixel).
+    #[test]
+    fn a_region_is_the_crop_of_the_whole_image() {
+        let scene = presets::load("model-tree").unwrap();
+        let cam = scene.camera.clone();
+        let mut s = Session::new(scene.clone()).unwrap();
+        let whole = s.render(&cam, &request(18, 12, 2, 2)).unwrap().frame;
+        let r = Rect {
+            x: 5,
+            y: 3,
+            width: 7,
+            height: 6,
+        };
+        let mut req = request(18, 12, 2, 2);
+        req.region = Some(r);
+        let mut fresh = Session::new(scene).unwrap();
+        assert!(fresh.render(&cam, &req).unwrap().frame == whole.crop(r));
+    }
+
+    /// Denoising changes the colour and nothing else; the statistics say so.
+    #[test]
+    fn the_denoised_frame_keeps_its_geometry() {
+        let scene = presets::load("mandelbulb").unwrap();
+        let cam = scene.camera.clone();
+        let mut s = Session::new(scene).unwrap();
+        let raw = s.render(&cam, &request(24, 16, 2, 2)).unwrap();
+        let mut req = request(24, 16, 2, 2);
+        req.path.denoise = true;
+        let clean = s.render(&cam, &req).unwrap();
+        assert!(clean.stats.path.unwrap().denoised);
+        assert_eq!(clean.stats.path.unwrap().samples_added, 0);
+        assert_eq!(raw.frame.depth, clean.frame.depth);
+        assert_eq!(raw.frame.id, clean.frame.id);
+        assert_ne!(raw.frame.colour, clean.frame.colour);
+    }
+
+    /// Views and settings the path tracer cannot render are refused before any work, naming
+    /// the setting and its range.
+    #[test]
+    fn bad_views_and_settings_are_refused_by_name() {
+        let scene = presets::load("menger").unwrap();
+        let cam = scene.camera.clone();
+        let mut s = Session::new(scene).unwrap();
+        let refused = |s: &mut Session, req: RenderRequest| match s.render(&cam, &req) {
+            Err(RenderError::Request(e)) => e,
+            other => panic!("not refused: {:?}", other.map(|r| r.stats)),
+        };
+        let mut req = request(16, 16, 1, 1);
+        req.projection = Projection::SideBySide {
+            eye_separation: 0.1,
+        };
+        assert_eq!(refused(&mut s, req), RequestError::PathView);
+        let mut req = request(16, 16, 1, 1);
+        req.supersample = 2;
+        assert_eq!(refused(&mut s, req), RequestError::PathView);
+        type Edit = fn(&mut RenderRequest);
+        let edits: [(&str, Edit); 7] = [
+            ("spp", |r| r.path.spp = 0),
+            ("spp", |r| r.path.spp = u32::MAX),
+            ("max_bounces", |r| r.path.max_bounces = 0),
+            ("aperture", |r| r.path.aperture = f64::NAN),
+            ("aperture", |r| r.path.aperture = -1.0),
+            ("focus_distance", |r| r.path.focus_distance = Some(0.0)),
+            ("time_limit", |r| r.path.time_limit = Some(f64::INFINITY)),
+        ];
+        for (field, set) in edits {
+            let mut req = request(16, 16, 1, 1);
+            set(&mut req);
+            let e = refused(&mut s, req);
+            assert!(
+                matches!(e, RequestError::PathSetting { name, .. } if name == field),
+                "{field}: {e}"
+            );
+            assert!(e.to_string().contains("out of range"), "{e}");
+        }
+        assert_eq!(s.counters().path_accumulators, 0);
+    }
+
+    /// A cancelled render returns `Cancelled` and keeps the samples already accumulated.
+    #[test]
+    fn a_cancel_keeps_the_samples_already_taken() {
+        let scene = presets::load("menger").unwrap();
+        let cam = scene.camera.clone();
+        let mut s = Session::new(scene).unwrap();
+        let first = s.render(&cam, &request(16, 12, 1, 1)).unwrap();
+        let token = CancelToken::new();
+        token.cancel();
+        let control = Control {
+            cancel: Some(&token),
+            progress: None,
+        };
+        let r = s.render_with(&cam, &request(16, 12, 8, 1), &control);
+        assert!(matches!(r, Err(RenderError::Cancelled)));
+        let again = s.render(&cam, &request(16, 12, 1, 1)).unwrap();
+        assert_eq!(again.stats.path.unwrap().samples_per_pixel, 1);
+        assert!(again.frame == first.frame);
+    }
+
+    /// With a time limit, at least one pass is made and the render stops near the limit.
+    #[test]
+    fn a_time_limit_stops_the_render_after_at_least_one_pass() {
+        let scene = presets::load("menger").unwrap();
+        let cam = scene.camera.clone();
+        let mut s = Session::new(scene).unwrap();
+        let mut req = request(16, 12, 1 << 20, 2);
+        req.path.time_limit = Some(1e-6);
+        let r = s.render(&cam, &req).unwrap();
+        assert_eq!(r.stats.path.unwrap().samples_per_pixel, 1);
+    }
+}
