@@ -474,6 +474,46 @@ pub fn material_editor(ui: &mut egui::Ui, m: &mut Material) -> Edit {
     {
         keep(&mut edit, Some("set trap colour".into()));
     }
+    ui.collapsing("path tracer", |ui| {
+        let before = m.emission.map(|v| v as f32);
+        let mut c = before;
+        ui.horizontal(|ui| {
+            let r = ui.color_edit_button_rgb(&mut c);
+            crate::script::place("param", "Material.emission".into(), &r);
+            ui.label("emission");
+        });
+        let moved: Vec<usize> = (0..3)
+            .filter(|&i| (c[i] - before[i]).abs() > 1e-5)
+            .collect();
+        if !moved.is_empty() {
+            for i in moved {
+                m.emission[i] = colour_from_f32(c[i]);
+            }
+            keep(&mut edit, Some("set emission".into()));
+        }
+        // The single numbers, with the ranges and texts the scene format declares.
+        for name in ["emission_strength", "metallic", "transmission", "ior"] {
+            let Some(f) = fathom_core::scene::fields::find(
+                fathom_core::scene::fields::MATERIAL_FIELDS,
+                name,
+            ) else {
+                continue;
+            };
+            let (lo, hi) = f.range.unwrap_or((0.0, 1.0));
+            let fathom_core::scene::fields::Slot::Reals(v) = (f.slot)(m) else {
+                continue;
+            };
+            let slider = egui::Slider::new(&mut v[0], lo..=hi)
+                .text(name.replace('_', " "))
+                .logarithmic(hi / lo.max(1e-3) >= 100.0 && name == "emission_strength");
+            if ui.add(slider).on_hover_text(f.doc).changed() {
+                keep(&mut edit, Some(format!("set {}", name.replace('_', " "))));
+            }
+        }
+        let alpha = (2.0 / (m.shininess + 2.0)).sqrt();
+        ui.label(format!("roughness {:.2} (from shininess)", alpha.sqrt()))
+            .on_hover_text("the path tracer's GGX roughness is the shininess mapped by Walter et al.'s correspondence");
+    });
     edit
 }
 

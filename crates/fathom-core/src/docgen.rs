@@ -187,6 +187,34 @@ fn group_markdown(out: &mut String, g: &Group) {
     }
 }
 
+/// The fields of a node's `material`, from [`crate::scene::fields::MATERIAL_FIELDS`].
+fn material_markdown(out: &mut String) {
+    let defaults = crate::scene::Material::default();
+    out.push_str(
+        "## Materials\n\n\
+         A node's `material: (...)`; fields left out take their defaults. The first four drive \
+         every renderer; the rest are the path tracer's (`fathom render --integrator path`), \
+         which also maps `shininess` to its GGX roughness (see docs/pathtrace.md).\n\n\
+         | field | components | default | range | meaning |\n|---|---|---|---|---|\n",
+    );
+    for f in crate::scene::fields::MATERIAL_FIELDS {
+        let d: Vec<String> = f.read(&defaults).iter().map(|v| format!("{v}")).collect();
+        let range = f
+            .range
+            .map_or("any finite".to_string(), |(lo, hi)| format!("[{lo}, {hi}]"));
+        let _ = writeln!(
+            out,
+            "| `{}` | {} | {} | {} | {} |",
+            f.name,
+            f.width,
+            d.join(", "),
+            range,
+            f.doc.replace('|', "\\|")
+        );
+    }
+    out.push('\n');
+}
+
 /// The whole of `docs/scene-reference.md`.
 pub fn scene_reference_markdown() -> String {
     let mut out = String::new();
@@ -210,10 +238,11 @@ pub fn scene_reference_markdown() -> String {
         let names: Vec<String> = g.defs.iter().map(|d| format!("`{}`", d.name)).collect();
         let _ = writeln!(out, "- {}: {}", g.title, names.join(", "));
     }
-    out.push_str("- Presets\n\n");
+    out.push_str("- Materials\n- Presets\n\n");
     for g in shape_groups().iter().chain(operator_groups().iter()) {
         group_markdown(&mut out, g);
     }
+    material_markdown(&mut out);
     out.push_str("## Presets\n\n");
     let _ = writeln!(
         out,

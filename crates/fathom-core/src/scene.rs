@@ -150,7 +150,13 @@ impl<K: Family> Call<K> {
     }
 }
 
-/// Surface appearance for Blinn-Phong shading.
+/// Surface appearance. `albedo`, `specular`, `shininess` and `trap_colour` drive every
+/// renderer (Blinn-Phong in the preview tracers); `metallic`, `emission`, `transmission` and
+/// `ior` are the path tracer's physically based extras (the preview ignores them), whose
+/// defaults change nothing, so files without them mean what they always meant. The path
+/// tracer's GGX roughness is `shininess` mapped by Walter et al.'s correspondence
+/// (docs/pathtrace.md); the fields and their ranges are declared once in
+/// [`fields::MATERIAL_FIELDS`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Material {
@@ -162,6 +168,37 @@ pub struct Material {
     pub shininess: f64,
     /// How much the orbit-trap palette replaces the albedo, [0, 1].
     pub trap_colour: f64,
+    /// Path tracer: 0 a dielectric (paint, stone), 1 a metal whose albedo is its
+    /// reflectance, [0, 1].
+    #[serde(skip_serializing_if = "is_zero")]
+    pub metallic: f64,
+    /// Path tracer: colour of emitted light, linear RGB in [0, 1].
+    #[serde(skip_serializing_if = "is_white")]
+    pub emission: [f64; 3],
+    /// Path tracer: emitted radiance = emission x this, [0, 1e6] (0: not a light).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub emission_strength: f64,
+    /// Path tracer: 0 opaque, 1 glass (light refracts through the shape's interior), [0, 1].
+    #[serde(skip_serializing_if = "is_zero")]
+    pub transmission: f64,
+    /// Path tracer: index of refraction of a transmissive material, [1, 3].
+    #[serde(skip_serializing_if = "is_default_ior")]
+    pub ior: f64,
+}
+
+/// The index of refraction of glass, the default.
+pub const DEFAULT_IOR: f64 = 1.5;
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+fn is_white(c: &[f64; 3]) -> bool {
+    *c == [1.0; 3]
+}
+
+fn is_default_ior(x: &f64) -> bool {
+    *x == DEFAULT_IOR
 }
 
 impl Default for Material {
@@ -171,6 +208,11 @@ impl Default for Material {
             specular: 0.3,
             shininess: 32.0,
             trap_colour: 0.0,
+            metallic: 0.0,
+            emission: [1.0; 3],
+            emission_strength: 0.0,
+            transmission: 0.0,
+            ior: DEFAULT_IOR,
         }
     }
 }

@@ -119,6 +119,7 @@ pub fn arb_material(mode: Mode) -> BoxedStrategy<Material> {
             specular,
             shininess,
             trap_colour,
+            ..Material::default()
         })
         .boxed()
 }

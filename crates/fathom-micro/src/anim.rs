@@ -76,6 +76,11 @@ fn lerp_material(a: &Material, b: &Material, w: f64) -> Material {
         specular: l(a.specular, b.specular),
         shininess: l(a.shininess, b.shininess),
         trap_colour: l(a.trap_colour, b.trap_colour),
+        metallic: l(a.metallic, b.metallic),
+        emission: [0, 1, 2].map(|i| l(a.emission[i], b.emission[i])),
+        emission_strength: l(a.emission_strength, b.emission_strength),
+        transmission: l(a.transmission, b.transmission),
+        ior: l(a.ior, b.ior),
     }
 }
 

@@ -91,6 +91,7 @@ pub fn load(name: &str) -> Result<Demo, MicroError> {
             specular: 0.1,
             shininess: 16.0,
             trap_colour: 0.0,
+            ..Material::default()
         },
     })
 }

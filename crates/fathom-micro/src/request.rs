@@ -161,6 +161,7 @@ impl Request {
                         specular: 0.2,
                         shininess: 24.0,
                         trap_colour: 0.0,
+                        ..Material::default()
                     }],
                     origin: format!("<cloud:{name}>{how}"),
                 }
@@ -250,6 +251,7 @@ impl Request {
                     specular: 0.1,
                     shininess: 16.0,
                     trap_colour: 0.0,
+                    ..Material::default()
                 },
                 |d| d.base.clone(),
             )

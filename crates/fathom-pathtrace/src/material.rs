@@ -9,7 +9,9 @@
 //! shape's interior with an index of refraction and Beer-Lambert absorption.
 //!
 //! **Today's files keep their meaning** ([`PbrMaterial::from_legacy`]):
-//! - `albedo` is the base colour, `metallic` 0, `transmission` 0;
+//! - `albedo` is the base colour; `metallic`, `emission` (x `emission_strength`),
+//!   `transmission` and `ior` carry over as they are (their defaults: an opaque, non-emissive
+//!   dielectric of IOR 1.5, what files without them always meant);
 //! - the Blinn-Phong exponent `n` becomes a GGX alpha by Walter et al.'s correspondence
 //!   ("Microfacet Models for Refraction through Rough Surfaces", EGSR 2007)
 //!   `alpha = sqrt(2 / (n + 2))`, so roughness = `alpha^(1/2)` (n = 32: 0.49; n = 128: 0.35);
@@ -99,9 +101,13 @@ impl PbrMaterial {
         let alpha = (2.0 / (m.shininess.max(0.0) + 2.0)).sqrt();
         PbrMaterial {
             base_colour: m.albedo.map(|c| c.clamp(0.0, 1.0)),
-            metallic: 0.0,
             roughness: alpha.sqrt().clamp(0.0, 1.0),
             specular: m.specular.clamp(0.0, 1.0),
+            metallic: m.metallic.clamp(0.0, 1.0),
+            emission: m.emission.map(|c| c.clamp(0.0, 1.0)),
+            emission_strength: m.emission_strength.clamp(0.0, MAX_EMISSION_STRENGTH),
+            transmission: m.transmission.clamp(0.0, 1.0),
+            ior: m.ior,
             ..PbrMaterial::diffuse([0.0; 3])
         }
     }
@@ -186,12 +192,28 @@ mod tests {
             specular: 0.5,
             shininess: 32.0,
             trap_colour: 0.0,
+            ..Default::default()
         });
         assert_eq!(m.base_colour, [0.2, 0.4, 0.6]);
         assert!((m.alpha() - (2.0f64 / 34.0).sqrt()).abs() < 1e-12);
         assert_eq!(m.specular, 0.5);
         assert_eq!(m.metallic, 0.0);
         m.validate().unwrap();
+        // The scene's physically based fields carry over.
+        let glass = PbrMaterial::from_legacy(&fathom_core::Material {
+            metallic: 0.25,
+            emission: [1.0, 0.5, 0.0],
+            emission_strength: 3.0,
+            transmission: 1.0,
+            ior: 1.33,
+            ..Default::default()
+        });
+        assert_eq!(
+            (glass.metallic, glass.transmission, glass.ior),
+            (0.25, 1.0, 1.33)
+        );
+        assert_eq!(glass.emitted(), DVec3::new(3.0, 1.5, 0.0));
+        glass.validate().unwrap();
         // Sharper highlights are smoother surfaces.
         let sharp = PbrMaterial::from_legacy(&fathom_core::Material {
             shininess: 1024.0,

@@ -84,6 +84,46 @@ pub static MATERIAL_FIELDS: &[FieldSpec<Material>] = &[
         doc: "how much the orbit-trap palette replaces the albedo",
         slot: |m| Slot::Reals(std::slice::from_mut(&mut m.trap_colour)),
     },
+    FieldSpec {
+        name: "metallic",
+        width: 1,
+        range: Some((0.0, 1.0)),
+        int: false,
+        doc: "path tracer: 0 dielectric, 1 metal (the albedo is its reflectance)",
+        slot: |m| Slot::Reals(std::slice::from_mut(&mut m.metallic)),
+    },
+    FieldSpec {
+        name: "emission",
+        width: 3,
+        range: Some((0.0, 1.0)),
+        int: false,
+        doc: "path tracer: colour of emitted light, linear RGB",
+        slot: |m| Slot::Reals(&mut m.emission),
+    },
+    FieldSpec {
+        name: "emission_strength",
+        width: 1,
+        range: Some((0.0, 1e6)),
+        int: false,
+        doc: "path tracer: emitted radiance is emission x this (0: not a light)",
+        slot: |m| Slot::Reals(std::slice::from_mut(&mut m.emission_strength)),
+    },
+    FieldSpec {
+        name: "transmission",
+        width: 1,
+        range: Some((0.0, 1.0)),
+        int: false,
+        doc: "path tracer: 0 opaque, 1 glass refracting through the interior",
+        slot: |m| Slot::Reals(std::slice::from_mut(&mut m.transmission)),
+    },
+    FieldSpec {
+        name: "ior",
+        width: 1,
+        range: Some((1.0, 3.0)),
+        int: false,
+        doc: "path tracer: index of refraction of a transmissive material",
+        slot: |m| Slot::Reals(std::slice::from_mut(&mut m.ior)),
+    },
 ];
 
 /// The fields of [`Light`] (its `shadows` switch is not a number).

@@ -29,10 +29,14 @@ pub enum SceneError {
     /// e.g. `root.children[0].shape` or `ifs.ops[2]`.
     #[error("{path}: {error}")]
     Entry { path: String, error: EntryError },
-    #[error(
-        "{path}.material: albedo and specular must lie in [0, 1], shininess in [1, 4096], trap_colour in [0, 1]"
-    )]
-    Material { path: String },
+    #[error("{path}.material.{field} = {value} is out of range [{min}, {max}]")]
+    Material {
+        path: String,
+        field: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
     #[error(transparent)]
     Camera(#[from] CameraError),
     #[error("{count} lights; the limit is {max}", max = limits::MAX_LIGHTS)]
@@ -69,7 +73,7 @@ impl SceneError {
         match self {
             SceneError::TooManyOps { path, .. }
             | SceneError::Entry { path, .. }
-            | SceneError::Material { path }
+            | SceneError::Material { path, .. }
             | SceneError::Flight { path, .. }
             | SceneError::Binding { path, .. } => Some(path),
             _ => None,
@@ -174,11 +178,17 @@ fn validate_node(n: &Node, path: &str) -> Result<(), SceneError> {
     for (i, op) in n.ops.iter().enumerate() {
         op.check().map_err(|e| entry(&format!("ops[{i}]"), e))?;
     }
-    let mat_ok = MATERIAL_FIELDS
-        .iter()
-        .all(|f| f.read(&n.material).iter().all(|&x| f.accepts(x)));
-    if !mat_ok {
-        return Err(SceneError::Material { path: path.into() });
+    for f in MATERIAL_FIELDS {
+        if let Some(&value) = f.read(&n.material).iter().find(|&&x| !f.accepts(x)) {
+            let (min, max) = f.range.unwrap_or((f64::MIN, f64::MAX));
+            return Err(SceneError::Material {
+                path: path.into(),
+                field: f.name,
+                value,
+                min,
+                max,
+            });
+        }
     }
     for (i, c) in n.children.iter().enumerate() {
         validate_node(c, &format!("{path}.children[{i}]"))?;

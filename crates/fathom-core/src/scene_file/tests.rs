@@ -187,6 +187,36 @@ fn invalid_scenes_name_the_node_path() {
 }
 
 #[test]
+fn path_tracer_materials_load_name_their_range_and_stay_out_of_files_that_do_not_use_them() {
+    let glass = BASE.replace(
+        "shape: Sphere(radius: 1.0),",
+        "shape: Sphere, material: Material(transmission: 1.0, ior: 1.33, metallic: 0.5, \
+         emission: (1.0, 0.5, 0.25), emission_strength: 4.0),",
+    );
+    let s = parse(&glass, "t.ron").unwrap();
+    let m = &s.root.material;
+    assert_eq!((m.transmission, m.ior, m.metallic), (1.0, 1.33, 0.5));
+    assert_eq!((m.emission, m.emission_strength), ([1.0, 0.5, 0.25], 4.0));
+    // Saved and read back, the fields are kept.
+    let again = parse(&to_string(&s), "t.ron").unwrap();
+    assert_eq!(again.root.material, *m);
+    // A field out of range is named with its range and its place.
+    let bad = glass.replace("ior: 1.33", "ior: 7.0");
+    let e = parse(&bad, "t.ron").unwrap_err().to_string();
+    assert!(
+        e.contains("root.material.ior = 7 is out of range [1, 3]") && e.starts_with("t.ron:"),
+        "{e}"
+    );
+    // Scenes that do not use them are written as before.
+    for p in PRESETS {
+        let text = to_string(&crate::presets::load(p.name).unwrap());
+        for field in ["metallic", "emission", "transmission", "ior"] {
+            assert!(!text.contains(field), "{}: {field} written", p.name);
+        }
+    }
+}
+
+#[test]
 fn deep_nesting_is_a_clean_error() {
     let n = 10_000;
     let mut text = String::from("Scene(version: 1, root: ");
