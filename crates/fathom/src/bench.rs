@@ -30,6 +30,9 @@ enum BenchKind {
     /// Streaming mesher: triangles/s, peak RSS and surface error for Menger and Mandelbulb,
     /// sphere Hausdorff, and Mandelbulber2's mesh export where installed.
     Mesh(crate::bench_mesh::MeshBenchArgs),
+    /// Path tracer: paths/s per preset at 640x480, time to 2 % RMSE against a high-spp
+    /// reference (raw and denoised), and one explorer accumulation pass at 1280x720.
+    Pathtrace(crate::bench_pathtrace::PathTraceBenchArgs),
     /// The sparse voxel octree explorer's evaluation: writes a markdown report with plots.
     Svo(crate::bench_svo::SvoArgs),
     /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
@@ -52,6 +55,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         BenchKind::Live(l) => crate::bench_live::run(l),
         BenchKind::Micro(m) => crate::bench_micro::run(m),
         BenchKind::Mesh(m) => crate::bench_mesh::run(m),
+        BenchKind::Pathtrace(p) => crate::bench_pathtrace::run(p),
         BenchKind::Svo(s) => crate::bench_svo::run(s),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
         BenchKind::Volume(v) => crate::bench_volume::run(v),
