@@ -78,7 +78,7 @@ pub fn render(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(), String> {
     // Open the file first, so a bad path fails before the render.
-    let file = fathom_trace::output::open_output(path).map_err(|e| e.to_string())?;
+    let file = fathom_image::output::open_output(path).map_err(|e| e.to_string())?;
     let mut s = Session::new(scene).map_err(|e| e.to_string())?;
     let control = Control {
         cancel: None,
@@ -87,5 +87,5 @@ pub fn render(
     let r = s
         .render_with(camera, req, &control)
         .map_err(|e| e.to_string())?;
-    fathom_trace::output::save_colour(&r.frame, file, path).map_err(|e| e.to_string())
+    fathom_image::output::save_colour(&r.frame, file, path).map_err(|e| e.to_string())
 }

@@ -423,7 +423,7 @@ mod tests {
     }
 
     #[test]
-    fn octree_frames_hold_the_target_frame_time_and_a_new_target_keeps_the_tree() {
+    fn octree_frames_ask_for_the_target_frame_time_and_a_new_target_keeps_the_tree() {
         let (mut w, cam, base, key, mut v) = octree_view("sierpinski");
         // The view holds still through this test: keep the moving view's budget.
         v.octree_still_budget = 0.0;

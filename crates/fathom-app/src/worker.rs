@@ -347,7 +347,7 @@ fn render(session: &mut Session, job: &FrameJob, generation: u64) -> FrameDone {
 
 /// The frame as an sRGB image (tonemapped as the PNG output is).
 fn picture(frame: &fathom_core::frame::Frame, stats: Stats) -> Picture {
-    let rgb = fathom_trace::post::to_rgb8(frame);
+    let rgb = fathom_image::post::to_rgb8(frame);
     let image = egui::ColorImage::from_rgb([frame.width as usize, frame.height as usize], &rgb);
     Picture { image, stats }
 }

@@ -88,7 +88,7 @@ fn offline(app: &ExplorerApp, w: u32, h: u32) -> Vec<u8> {
     };
     let mut s = Session::new(app.scene.clone()).unwrap();
     let r = s.render(&app.view_camera(), &req).unwrap();
-    fathom_trace::post::to_rgb8(&r.frame)
+    fathom_image::post::to_rgb8(&r.frame)
 }
 
 /// (largest channel difference, channels differing by more than `MAX_LEVEL_DIFF`) over every
@@ -196,7 +196,7 @@ fn a_scripted_session_ends_with_the_viewport_equal_to_an_offline_render() {
         supersample: h.state().viewport.refine_supersample,
         ..h.state().settings.base_request()
     };
-    let other = fathom_trace::post::to_rgb8(
+    let other = fathom_image::post::to_rgb8(
         &Session::new(before)
             .unwrap()
             .render(&h.state().view_camera(), &req)
@@ -337,7 +337,7 @@ fn the_volume_renderer_refines_to_the_offline_cloud() {
         req.height = ht;
         let mut s = Session::new(h.state().scene.clone()).unwrap();
         let r = s.render(&h.state().view_camera(), &req).unwrap();
-        fathom_trace::post::to_rgb8(&r.frame)
+        fathom_image::post::to_rgb8(&r.frame)
     };
     let (_, over) = compare(w, ht, &solid, &cloud);
     assert!(
@@ -391,7 +391,7 @@ fn the_path_tracer_accumulates_while_the_view_is_still_and_moving_shows_the_prev
         let mut s = Session::new(h.state().scene.clone()).unwrap();
         let r = s.render(&h.state().view_camera(), &req).unwrap();
         assert_eq!(r.stats.path.unwrap().samples_per_pixel, 6);
-        fathom_trace::post::to_rgb8(&r.frame)
+        fathom_image::post::to_rgb8(&r.frame)
     };
     let (max, over) = compare(w, ht, &shown, &want);
     assert_eq!(over, 0, "largest difference {max}");

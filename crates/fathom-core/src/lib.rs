@@ -1,5 +1,11 @@
 //! fathom-core: what a scene is and how it is evaluated.
 //!
+//! The modules are grouped in folders: [`number`] (numbers and vectors), [`family`] (the
+//! registry and the families it declares), [`model`] (the scene and its files), [`program`]
+//! (tape and evaluation), [`animation`] (flight paths, camera paths, parameter paths,
+//! bindings) and [`files`] (atomic output, cleanup, bounded input); each module is also
+//! reachable at the crate root by its own name, as listed here:
+//!
 //! - [`registry`]: how each primitive, fractal and operator is declared once;
 //! - [`primitives`], [`fractals`], [`transforms`], [`modifiers`], [`combine`]: the declarations;
 //! - [`scene`]: the scene tree, camera, lights, render settings; [`scenes`]: code-built ones;
@@ -15,41 +21,27 @@
 //!   [`cleanup`]: temporary files removed on every exit path, Ctrl-C included;
 //!   [`input_file`]: inputs read only when regular files under a size limit.
 
-pub mod atomic_file;
-pub mod binding;
-pub mod call_serde;
-pub mod camera;
-pub mod camera_path;
-pub mod cleanup;
-pub mod combine;
-pub mod dd;
-pub mod dd4;
-pub mod docgen;
-pub mod eval;
-pub mod flight;
-pub mod fractals;
+pub mod animation;
+pub mod family;
+pub mod files;
 pub mod frame;
-pub mod input_file;
 pub mod limits;
-pub mod modifiers;
-pub mod param_path;
-pub mod presets;
-pub mod primitives;
-pub mod real;
-pub mod reference;
-pub mod registry;
-pub mod scene;
-pub mod scene_file;
-pub mod scenes;
-pub mod shared;
-pub mod tape;
-#[cfg(test)]
-mod tape_props;
+pub mod model;
+pub mod number;
+pub mod program;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
-pub mod transforms;
-pub mod value;
-pub mod vec3;
+
+// Every module keeps its path at the crate root (`fathom_core::scene`, `crate::tape`, ...), so
+// the folders above group the code without renaming what other crates use.
+pub use animation::{binding, camera_path, flight, param_path};
+pub use family::{
+    call_serde, combine, docgen, fractals, modifiers, primitives, registry, transforms,
+};
+pub use files::{atomic_file, cleanup, input_file};
+pub use model::{camera, presets, scene, scene_file, scenes};
+pub use number::{dd, dd4, real, value, vec3};
+pub use program::{eval, reference, shared, tape};
 
 pub use camera::{Camera, CameraFrame, Projection};
 pub use dd::Dd;

@@ -23,11 +23,11 @@ pub fn encode_frame(frame: &Frame) -> Result<Vec<u8>, String> {
     encode_rgb8(
         frame.width,
         frame.height,
-        &fathom_trace::post::to_rgb8(frame),
+        &fathom_image::post::to_rgb8(frame),
     )
 }
 
-/// PNG bytes of an 8-bit RGB image (the encoder and settings of `fathom_trace::output`).
+/// PNG bytes of an 8-bit RGB image (the encoder and settings of `fathom_image::output`).
 pub fn encode_rgb8(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, String> {
     use image::ImageEncoder;
     let mut out = Vec::new();

@@ -305,9 +305,9 @@ fn tiles_rendered_in_shards_assemble_to_the_single_render_byte_for_byte() {
     let whole = Session::new(scene).unwrap().render(&camera, &req).unwrap();
     let want = encode_frame(&whole.frame).unwrap();
     let path = dir.join("whole.png");
-    fathom_trace::output::save_colour(
+    fathom_image::output::save_colour(
         &whole.frame,
-        fathom_trace::output::open_output(&path).unwrap(),
+        fathom_image::output::open_output(&path).unwrap(),
         &path,
     )
     .unwrap();

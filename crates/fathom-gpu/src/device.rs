@@ -8,7 +8,9 @@ use std::sync::{Arc, Mutex};
 
 /// A wgpu device with its queue and what we know about the adapter.
 pub struct Gpu {
+    /// The logical device every buffer and pipeline is made on.
     pub device: wgpu::Device,
+    /// The queue work is submitted to.
     pub queue: wgpu::Queue,
     /// The adapter's description (name, backend, device type).
     pub info: wgpu::AdapterInfo,

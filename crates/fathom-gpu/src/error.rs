@@ -18,27 +18,47 @@ pub enum GpuError {
     },
     /// The adapter refused to give a device.
     #[error("the GPU adapter `{adapter}` refused to create a device: {message}")]
-    RequestDevice { adapter: String, message: String },
+    RequestDevice {
+        /// The adapter's name.
+        adapter: String,
+        /// What wgpu said.
+        message: String,
+    },
     /// The WGSL program failed validation (names the registry entry).
     #[error(transparent)]
     Shader(#[from] ShaderError),
     /// The driver rejected a pipeline or another object.
     #[error("the GPU driver rejected {what}: {message}")]
-    Driver { what: String, message: String },
+    Driver {
+        /// The object the driver rejected.
+        what: String,
+        /// What the driver said.
+        message: String,
+    },
     /// A buffer would exceed the device's limits.
     #[error(
         "{what} needs {bytes} bytes, more than this device allows in one storage buffer ({limit} bytes)"
     )]
     BufferTooLarge {
+        /// The buffer.
         what: String,
+        /// The bytes it needs.
         bytes: u64,
+        /// The device's largest storage buffer in bytes.
         limit: u64,
     },
     /// The image is larger than the device's texture limit.
     #[error(
         "a {width}x{height} image exceeds this device's largest texture ({limit} pixels per side); render smaller or on the CPU"
     )]
-    ImageTooLarge { width: u32, height: u32, limit: u32 },
+    ImageTooLarge {
+        /// Requested width in pixels.
+        width: u32,
+        /// Requested height in pixels.
+        height: u32,
+        /// The device's largest texture side in pixels.
+        limit: u32,
+    },
     /// The device was lost (driver reset, GPU removed, or a timeout).
     #[error("the GPU device was lost: {0}; re-run, or render on the CPU without --gpu")]
     DeviceLost(String),
@@ -56,5 +76,10 @@ pub enum GpuError {
         "the view is zoomed too deep for f32 on the GPU (pixel footprint {footprint:e} at distance \
          {distance:e} from the origin); render on the CPU, which switches to f64"
     )]
-    TooDeep { footprint: f64, distance: f64 },
+    TooDeep {
+        /// The pixel footprint in world units.
+        footprint: f64,
+        /// The view's distance from the origin.
+        distance: f64,
+    },
 }

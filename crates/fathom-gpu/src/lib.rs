@@ -8,6 +8,8 @@
 //! - [`renderer`]: buffers, pipelines, the render passes and the readback into a `Frame`;
 //! - [`precision`]: where f32 positions stop being enough and the CPU's f64 path must take over.
 
+#![warn(missing_docs)]
+
 pub mod device;
 pub mod error;
 mod passes;

@@ -27,14 +27,16 @@ fn mode(p: Projection) -> u32 {
 /// What to render.
 #[derive(Clone, Copy, Debug)]
 pub struct RenderOptions {
-    /// Size of one eye's view in pixels.
+    /// Width of one eye's view in pixels.
     pub width: u32,
+    /// Height of one eye's view in pixels.
     pub height: u32,
+    /// Mono or one of the stereo layouts.
     pub projection: Projection,
     /// Run the cone-marching prepass.
     pub prepass: bool,
     /// Apply the scene's distance fog in the colour pass. A caller that reads the frame back
-    /// and runs the shared post effects (fathom-trace's `post::finish`, which fogs after SSAO
+    /// and runs the shared post effects (fathom-image's `post::finish_view`, which fogs after SSAO
     /// as the CPU tracer does) turns this off; the displayable texture wants it on.
     pub fog: bool,
 }
@@ -54,12 +56,15 @@ impl Default for RenderOptions {
 /// Counters and timings of one GPU frame.
 #[derive(Clone, Debug, Default)]
 pub struct RenderStats {
-    /// Output size in pixels.
+    /// Output width in pixels.
     pub width: u32,
+    /// Output height in pixels.
     pub height: u32,
-    /// Distance evaluations of the prepass, the depth pass and the colour pass.
+    /// Distance evaluations of the prepass.
     pub de_prepass: u64,
+    /// Distance evaluations of the depth pass.
     pub de_trace: u64,
+    /// Distance evaluations of the colour pass.
     pub de_shade: u64,
     /// Primary rays that hit.
     pub hits: u64,

@@ -158,10 +158,15 @@ impl Pipelines {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuValue {
+    /// Signed distance bound in world units.
     pub d: f32,
+    /// Material id of the node that won the combine.
     pub id: f32,
+    /// Second material id, blended in with weight `blend`.
     pub id2: f32,
+    /// Weight of `id2`.
     pub blend: f32,
+    /// Orbit trap: the smallest `|z|` an iteration reached.
     pub trap: f32,
 }
 

@@ -8,11 +8,18 @@ use thiserror::Error;
 pub enum LiveError {
     /// A binding is not usable; `at` says where (`bindings[2].source`).
     #[error("{at}: {msg}")]
-    Binding { at: String, msg: String },
+    Binding {
+        /// Where in the scene the binding stands.
+        at: String,
+        /// What is wrong with it.
+        msg: String,
+    },
     /// The listener could not bind its address.
     #[error("cannot listen for OSC on {addr}: {source}")]
     Bind {
+        /// The address asked for.
         addr: SocketAddr,
+        /// What the system said.
         #[source]
         source: std::io::Error,
     },
@@ -22,7 +29,9 @@ pub enum LiveError {
     /// Sending failed.
     #[error("cannot send to {to}: {source}")]
     Send {
+        /// The receiver.
         to: SocketAddr,
+        /// What the system said.
         #[source]
         source: std::io::Error,
     },

@@ -15,6 +15,8 @@
 //! binding's level and value). [`send`] sends OSC (`fathom osc-send`). MIDI is not supported:
 //! `midir` needs the ALSA development headers (`libasound2-dev`) to build on Linux.
 
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod modulator;
 pub mod osc;

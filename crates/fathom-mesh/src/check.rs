@@ -2,7 +2,7 @@
 //! exactly two triangles, once in each direction), its enclosed volume, and two-sided
 //! Hausdorff distances to a known surface.
 
-use crate::Mesh;
+use crate::IsoMesh;
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 
@@ -63,7 +63,7 @@ pub fn edges(tris: &[[u32; 3]]) -> EdgeReport {
 }
 
 /// The enclosed volume (positive when the triangles face outward).
-pub fn volume(m: &Mesh) -> f64 {
+pub fn volume(m: &IsoMesh) -> f64 {
     m.tris
         .iter()
         .map(|t| {
@@ -112,14 +112,14 @@ pub fn point_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
 
 /// Nearest-triangle queries through a uniform hash of triangle bounding boxes.
 pub struct TriangleIndex<'a> {
-    mesh: &'a Mesh,
+    mesh: &'a IsoMesh,
     cell: f64,
     buckets: HashMap<[i64; 3], Vec<u32>>,
 }
 
 impl<'a> TriangleIndex<'a> {
     /// Buckets of side `cell` (about the mesh's edge length).
-    pub fn new(mesh: &'a Mesh, cell: f64) -> Self {
+    pub fn new(mesh: &'a IsoMesh, cell: f64) -> Self {
         let mut buckets: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
         for (i, t) in mesh.tris.iter().enumerate() {
             let ps = t.map(|v| Vec3::from(mesh.verts[v as usize].p).as_dvec3());
@@ -171,7 +171,7 @@ fn key(p: DVec3, cell: f64) -> [i64; 3] {
 /// to the mesh over `samples` points on the true surface. Returns (mesh to surface, surface to
 /// mesh).
 pub fn hausdorff(
-    mesh: &Mesh,
+    mesh: &IsoMesh,
     sdf: &dyn Fn(DVec3) -> f64,
     samples: &[DVec3],
     voxel: f64,

@@ -3,7 +3,7 @@
 //! mesh's bounds. A scene that reaches the search cube's faces (a floor plane, an unbounded
 //! repetition) has no finite box here and is asked for `--bounds`.
 
-use crate::MeshError;
+use crate::IsoMeshError;
 use fathom_core::scene::Scene;
 use fathom_core::{Evaluator, Tape, V3};
 use glam::DVec3;
@@ -17,7 +17,7 @@ pub const SEARCH_HALF: f64 = 8.0;
 pub const LEVELS: u32 = 9;
 
 /// The fitted box (min, max).
-pub fn fit_bounds(_scene: &Scene, tape: &Tape) -> Result<(DVec3, DVec3), MeshError> {
+pub fn fit_bounds(_scene: &Scene, tape: &Tape) -> Result<(DVec3, DVec3), IsoMeshError> {
     let mut nodes = vec![DVec3::splat(-SEARCH_HALF)];
     let mut side = 2.0 * SEARCH_HALF;
     for _ in 0..LEVELS {
@@ -44,12 +44,12 @@ pub fn fit_bounds(_scene: &Scene, tape: &Tape) -> Result<(DVec3, DVec3), MeshErr
             })
             .collect();
         if nodes.is_empty() {
-            return Err(MeshError::Bounds(format!(
+            return Err(IsoMeshError::Bounds(format!(
                 "the scene has no surface within +-{SEARCH_HALF}; give --bounds"
             )));
         }
         if nodes.len() > 4_000_000 {
-            return Err(MeshError::Bounds(
+            return Err(IsoMeshError::Bounds(
                 "the scene's surface is too large to fit bounds automatically; give --bounds"
                     .into(),
             ));
@@ -58,7 +58,7 @@ pub fn fit_bounds(_scene: &Scene, tape: &Tape) -> Result<(DVec3, DVec3), MeshErr
     let lo = nodes.iter().fold(DVec3::splat(f64::MAX), |a, &b| a.min(b)) - DVec3::splat(side);
     let hi = nodes.iter().fold(DVec3::splat(f64::MIN), |a, &b| a.max(b)) + DVec3::splat(2.0 * side);
     if lo.min_element() <= -SEARCH_HALF || hi.max_element() >= SEARCH_HALF {
-        return Err(MeshError::Bounds(format!(
+        return Err(IsoMeshError::Bounds(format!(
             "the scene reaches beyond +-{SEARCH_HALF} (a plane or an unbounded repetition?); \
              give --bounds x0,y0,z0,x1,y1,z1"
         )));

@@ -1,7 +1,7 @@
 //! The sampling grid: bounds, voxel size, the documented limits, and the memory estimate that is
 //! printed (and checked against `--max-memory`) before anything large is allocated.
 
-use crate::MeshError;
+use crate::IsoMeshError;
 use glam::DVec3;
 
 /// Most cells along the longest side of the bounds.
@@ -28,13 +28,13 @@ pub struct Grid {
 impl Grid {
     /// The grid of `resolution` cells along the longest side of `lo..hi`, checked against the
     /// limits.
-    pub fn new(lo: DVec3, hi: DVec3, resolution: u32) -> Result<Grid, MeshError> {
+    pub fn new(lo: DVec3, hi: DVec3, resolution: u32) -> Result<Grid, IsoMeshError> {
         if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&resolution) {
-            return Err(MeshError::Resolution(resolution));
+            return Err(IsoMeshError::Resolution(resolution));
         }
         let ok = |v: DVec3| v.is_finite() && v.abs().max_element() <= MAX_COORD;
         if !(ok(lo) && ok(hi)) || (hi - lo).min_element() <= 0.0 {
-            return Err(MeshError::Bounds(format!(
+            return Err(IsoMeshError::Bounds(format!(
                 "bounds {lo} .. {hi} must be finite, within +-{MAX_COORD}, with max > min on every axis"
             )));
         }
@@ -161,7 +161,7 @@ mod tests {
         assert_eq!(g.h, 2.0 / 64.0);
         assert!(matches!(
             Grid::new(DVec3::ZERO, DVec3::ONE, MAX_RESOLUTION + 1),
-            Err(MeshError::Resolution(_))
+            Err(IsoMeshError::Resolution(_))
         ));
         assert!(Grid::new(DVec3::ZERO, DVec3::ONE, 2).is_err());
         assert!(Grid::new(DVec3::ONE, DVec3::ZERO, 64).is_err());

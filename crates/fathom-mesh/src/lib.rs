@@ -73,7 +73,7 @@ pub struct Vertex {
 
 /// Why a mesh could not be made or written.
 #[derive(Debug, Error)]
-pub enum MeshError {
+pub enum IsoMeshError {
     #[error(
         "--resolution {0} is out of range [{min}, {max}]",
         min = grid::MIN_RESOLUTION,
@@ -107,12 +107,12 @@ pub enum MeshError {
 /// Receives a mesh as it is made: vertices in id order, then triangles that use them.
 pub trait MeshSink: Send {
     /// New vertices; the first has id = number of vertices sent before.
-    fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError>;
+    fn vertices(&mut self, v: &[Vertex]) -> Result<(), IsoMeshError>;
     /// Triangles (counter-clockwise seen from outside) over ids sent so far; `window` holds
     /// every vertex they use.
-    fn triangles(&mut self, t: &[[u32; 3]], window: &Window) -> Result<(), MeshError>;
+    fn triangles(&mut self, t: &[[u32; 3]], window: &Window) -> Result<(), IsoMeshError>;
     /// Called once after the last triangle.
-    fn finish(&mut self) -> Result<(), MeshError>;
+    fn finish(&mut self) -> Result<(), IsoMeshError>;
 }
 
 /// The vertices recent triangles may use: ids `first .. first + verts.len()`.
@@ -137,21 +137,21 @@ impl Window<'_> {
 
 /// A whole mesh in memory.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Mesh {
+pub struct IsoMesh {
     pub verts: Vec<Vertex>,
     pub tris: Vec<[u32; 3]>,
 }
 
-impl MeshSink for Mesh {
-    fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError> {
+impl MeshSink for IsoMesh {
+    fn vertices(&mut self, v: &[Vertex]) -> Result<(), IsoMeshError> {
         self.verts.extend_from_slice(v);
         Ok(())
     }
-    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), MeshError> {
+    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), IsoMeshError> {
         self.tris.extend_from_slice(t);
         Ok(())
     }
-    fn finish(&mut self) -> Result<(), MeshError> {
+    fn finish(&mut self) -> Result<(), IsoMeshError> {
         Ok(())
     }
 }
@@ -164,15 +164,15 @@ pub struct Counter {
 }
 
 impl MeshSink for Counter {
-    fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError> {
+    fn vertices(&mut self, v: &[Vertex]) -> Result<(), IsoMeshError> {
         self.verts += v.len() as u64;
         Ok(())
     }
-    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), MeshError> {
+    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), IsoMeshError> {
         self.tris += t.len() as u64;
         Ok(())
     }
-    fn finish(&mut self) -> Result<(), MeshError> {
+    fn finish(&mut self) -> Result<(), IsoMeshError> {
         Ok(())
     }
 }

@@ -5,7 +5,7 @@
 use crate::block::{Block, CellLookup, Field};
 use crate::cull::Culler;
 use crate::grid::{BRICK, BYTES_PER_BRICK, Grid, MemoryEstimate, human_bytes};
-use crate::{MeshError, MeshSink, Method, Vertex, Window};
+use crate::{IsoMeshError, MeshSink, Method, Vertex, Window};
 use fathom_core::scene::Scene;
 use fathom_core::{Evaluator, F32x8, Tape};
 use glam::DVec3;
@@ -71,9 +71,9 @@ pub struct Plan {
 
 /// Validates the options, fits or checks the bounds, and estimates memory from a coarse
 /// culling pass (at most 128 nodes per side); refuses the run if it exceeds `max_memory`.
-pub fn plan(scene: &Scene, tape: &Tape, o: &MeshOptions) -> Result<Plan, MeshError> {
+pub fn plan(scene: &Scene, tape: &Tape, o: &MeshOptions) -> Result<Plan, IsoMeshError> {
     if !(o.cull_margin.is_finite() && (1.0..=16.0).contains(&o.cull_margin)) {
-        return Err(MeshError::Bounds(format!(
+        return Err(IsoMeshError::Bounds(format!(
             "cull margin {} is out of range [1, 16]",
             o.cull_margin
         )));
@@ -117,7 +117,7 @@ pub fn plan(scene: &Scene, tape: &Tape, o: &MeshOptions) -> Result<Plan, MeshErr
         }
     };
     if estimate.total() > o.max_memory {
-        return Err(MeshError::Memory {
+        return Err(IsoMeshError::Memory {
             estimate: estimate.to_string(),
             limit: human_bytes(o.max_memory),
         });
@@ -165,7 +165,7 @@ pub fn mesh(
     o: &MeshOptions,
     sink: &mut dyn MeshSink,
     progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<MeshStats, MeshError> {
+) -> Result<MeshStats, IsoMeshError> {
     let start = Instant::now();
     let grid = plan.grid;
     let field = Field {
@@ -188,7 +188,7 @@ pub fn mesh(
         let dims = grid.cells.map(|n| n as usize);
         let block = field.block(&mut ev, [0; 3], dims);
         if block.verts.len() as u64 > u32::MAX as u64 {
-            return Err(MeshError::TooManyVertices);
+            return Err(IsoMeshError::TooManyVertices);
         }
         stats.evaluations = block.evals;
         stats.vertices = block.verts.len() as u64;
@@ -230,7 +230,7 @@ pub fn mesh(
             stats.evaluations += blk.evals;
         }
         if next_id > u32::MAX as u64 {
-            return Err(MeshError::TooManyVertices);
+            return Err(IsoMeshError::TooManyVertices);
         }
         let layer_verts: Vec<Vertex> = blocks
             .iter()

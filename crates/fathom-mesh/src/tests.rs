@@ -3,7 +3,7 @@
 //! before allocation.
 
 use crate::check::{self, EdgeReport};
-use crate::{Mesh, MeshError, MeshOptions, Method, mesh, plan};
+use crate::{IsoMesh, IsoMeshError, MeshOptions, Method, mesh, plan};
 use fathom_core::primitives::Primitive;
 use fathom_core::scene::Scene;
 use fathom_core::transforms::Transform;
@@ -63,10 +63,10 @@ fn opts(method: Method, resolution: u32) -> MeshOptions {
     }
 }
 
-fn run(scene: &Scene, o: &MeshOptions) -> (Mesh, crate::MeshStats) {
+fn run(scene: &Scene, o: &MeshOptions) -> (IsoMesh, crate::MeshStats) {
     let tape = Tape::compile(scene).unwrap();
     let p = plan(scene, &tape, o).unwrap();
-    let mut m = Mesh::default();
+    let mut m = IsoMesh::default();
     let s = mesh(scene, &tape, &p, o, &mut m, &|_, _| {}).unwrap();
     (m, s)
 }
@@ -146,7 +146,7 @@ fn dual_contouring_keeps_the_box_corners() {
 }
 
 /// Triangles as sorted position triples, independent of vertex numbering.
-fn triangle_set(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
+fn triangle_set(m: &IsoMesh) -> Vec<[[u32; 3]; 3]> {
     let mut v: Vec<[[u32; 3]; 3]> = m
         .tris
         .iter()
@@ -212,7 +212,7 @@ fn oversized_runs_are_refused_before_allocation_with_an_estimate() {
     let mut o = opts(Method::MarchingCubes, 1 << 16);
     o.max_memory = 64 << 20;
     let e = plan(&scene, &tape, &o).unwrap_err();
-    assert!(matches!(e, MeshError::Memory { .. }), "{e}");
+    assert!(matches!(e, IsoMeshError::Memory { .. }), "{e}");
     let msg = e.to_string();
     assert!(
         msg.contains("bricks per layer") && msg.contains("--max-memory"),
@@ -221,7 +221,7 @@ fn oversized_runs_are_refused_before_allocation_with_an_estimate() {
     o.resolution = (1 << 16) + 1;
     assert!(matches!(
         plan(&scene, &tape, &o),
-        Err(MeshError::Resolution(_))
+        Err(IsoMeshError::Resolution(_))
     ));
     assert!(t.elapsed().as_secs_f64() < 20.0);
 }

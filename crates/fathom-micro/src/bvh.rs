@@ -166,7 +166,7 @@ impl ShellBvh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{Mesh, RawMesh, UvProjection};
+    use crate::mesh::{RawMesh, TriangleMesh, UvProjection};
     use crate::texture::Tiling;
 
     /// `n` triangles around one vertex: the shape that made the bottom-up build quadratic.
@@ -183,7 +183,7 @@ mod tests {
             corner_normals: None,
             corner_uvs: None,
         };
-        let (m, _) = Mesh::build(raw, Some(UvProjection::Planar), "fan").unwrap();
+        let (m, _) = TriangleMesh::build(raw, Some(UvProjection::Planar), "fan").unwrap();
         Shell::build(&m, 0.01, &Tiling::default()).unwrap()
     }
 

@@ -3,7 +3,7 @@
 //! scene file in `crates/fathom-micro/demos/`, a shell height, a tiling and a camera.
 
 use crate::error::MicroError;
-use crate::mesh::{self, Mesh, MeshReport};
+use crate::mesh::{self, MeshReport, TriangleMesh};
 use crate::texture::{Cell, Tiling};
 use fathom_core::scene::{Material, Scene};
 use fathom_core::scene_file;
@@ -12,7 +12,7 @@ use glam::DVec3;
 /// A demo's ingredients.
 pub struct Demo {
     pub name: &'static str,
-    pub mesh: Mesh,
+    pub mesh: TriangleMesh,
     pub mesh_report: MeshReport,
     pub texture: Scene,
     pub texture_origin: String,

@@ -5,7 +5,7 @@ use thiserror::Error;
 
 /// Why a mesh could not be read or used.
 #[derive(Debug, Error)]
-pub enum MeshError {
+pub enum MeshLoadError {
     /// The file could not be opened or read.
     #[error("{origin}: cannot read the mesh: {source}")]
     Io {
@@ -58,7 +58,7 @@ pub enum MeshError {
 #[derive(Debug, Error)]
 pub enum MicroError {
     #[error(transparent)]
-    Mesh(#[from] MeshError),
+    Mesh(#[from] MeshLoadError),
     /// A parameter is outside its documented range.
     #[error("{name} = {value} is out of range {range}")]
     Range {

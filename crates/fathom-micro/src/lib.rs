@@ -33,8 +33,8 @@ pub mod shell;
 pub mod tet;
 pub mod texture;
 
-pub use error::{MeshError, MicroError};
-pub use mesh::{Mesh, MeshReport, UvProjection};
+pub use error::{MeshLoadError, MicroError};
+pub use mesh::{MeshReport, TriangleMesh, UvProjection};
 pub use render::{MicroScene, MicroStats, RenderOptions, render};
 pub use shell::Shell;
 pub use texture::{Cell, Texture, Tiling};

@@ -12,7 +12,7 @@
 
 use crate::error::MicroError;
 use crate::limits;
-use crate::mesh::Mesh;
+use crate::mesh::TriangleMesh;
 use crate::tet::{NONE, Tet, jacobian, spectral_norm};
 use crate::texture::Tiling;
 use glam::DVec3;
@@ -60,7 +60,7 @@ pub struct Shell {
 impl Shell {
     /// Builds the shell of `mesh` with height `height` (world units) for a texture tiled as
     /// `tiling` says.
-    pub fn build(mesh: &Mesh, height: f64, tiling: &Tiling) -> Result<Shell, MicroError> {
+    pub fn build(mesh: &TriangleMesh, height: f64, tiling: &Tiling) -> Result<Shell, MicroError> {
         let (lo, hi) = mesh.bounds();
         let diag = (hi - lo).length();
         let rel = height / diag.max(1e-300);
@@ -158,12 +158,12 @@ impl Shell {
 }
 
 /// Shell vertex id: base vertex `i` is `2 i`, its offset copy `2 i + 1`.
-fn shell_vertex(mesh: &Mesh, t: &Tet, k: usize) -> u64 {
+fn shell_vertex(mesh: &TriangleMesh, t: &Tet, k: usize) -> u64 {
     2 * mesh.triangles[t.tri as usize][t.corner[k] as usize] as u64 + t.top[k] as u64
 }
 
 /// Pairs tetrahedra across shared faces; counts boundary, interior and overfull faces.
-fn adjacency(mesh: &Mesh, tets: &[Tet], report: &mut ShellReport) -> Vec<[u32; 4]> {
+fn adjacency(mesh: &TriangleMesh, tets: &[Tet], report: &mut ShellReport) -> Vec<[u32; 4]> {
     let mut faces: HashMap<[u64; 3], Vec<(u32, u8)>> = HashMap::with_capacity(tets.len() * 2);
     for (ti, t) in tets.iter().enumerate() {
         for k in 0..4 {

@@ -8,7 +8,7 @@ use fathom_core::scene::{Call, Node, Scene};
 use fathom_core::transforms::Transform;
 use fathom_core::{Camera, Evaluator, Tape, V3};
 use fathom_micro::march::{self, MarchParams, Scratch};
-use fathom_micro::mesh::{self, Mesh, RawMesh};
+use fathom_micro::mesh::{self, RawMesh, TriangleMesh};
 use fathom_micro::shade::Lighting;
 use fathom_micro::{Cell, MicroScene, RenderOptions, Shell, Texture, Tiling};
 use glam::{DVec2, DVec3};
@@ -35,7 +35,7 @@ fn options(w: u32, h: u32, eye: DVec3, target: DVec3) -> RenderOptions {
     }
 }
 
-fn micro(mesh: &Mesh, height: f64, tiling: &Tiling, tex: &Scene) -> MicroScene {
+fn micro(mesh: &TriangleMesh, height: f64, tiling: &Tiling, tex: &Scene) -> MicroScene {
     let shell = Shell::build(mesh, height, tiling).unwrap();
     let texture = Texture::from_scene(tex, "test").unwrap();
     MicroScene::new(shell, texture, Lighting::from_scene(tex), None)
@@ -45,7 +45,7 @@ fn micro(mesh: &Mesh, height: f64, tiling: &Tiling, tex: &Scene) -> MicroScene {
 const A: f64 = 0.499;
 const H: f64 = 0.5;
 
-fn flat_triangle() -> Mesh {
+fn flat_triangle() -> TriangleMesh {
     let p = [
         DVec3::new(-1.0, 0.0, -1.0),
         DVec3::new(-1.0, 0.0, 1.0),
@@ -59,7 +59,7 @@ fn flat_triangle() -> Mesh {
             p.map(|q| DVec2::new(A * (q.x + 1.0), A * (q.z + 1.0))),
         ]),
     };
-    Mesh::build(raw, None, "flat").unwrap().0
+    TriangleMesh::build(raw, None, "flat").unwrap().0
 }
 
 #[test]
@@ -170,7 +170,7 @@ fn plane_through(offset_y: f64, normal: [f64; 3]) -> Scene {
 
 #[test]
 fn no_detail_appears_outside_the_shell() {
-    let (mesh, _) = Mesh::build(mesh::bush::raw(6), None, "bush").unwrap();
+    let (mesh, _) = TriangleMesh::build(mesh::bush::raw(6), None, "bush").unwrap();
     let tiling = Tiling::default();
     let o = options(80, 60, DVec3::new(2.2, 1.6, 3.2), DVec3::ZERO);
     // The shell's own coverage: a texture solid everywhere below y = 10 is hit where a ray
@@ -205,7 +205,7 @@ fn no_detail_appears_outside_the_shell() {
     );
 }
 
-fn roof() -> Mesh {
+fn roof() -> TriangleMesh {
     let p = [
         DVec3::new(0.0, 0.0, 0.0),
         DVec3::new(0.0, 0.0, 1.0),
@@ -220,7 +220,7 @@ fn roof() -> Mesh {
         corner_normals: None,
         corner_uvs: Some(tris.iter().map(|t| t.map(|i| uv(p[i]))).collect()),
     };
-    Mesh::build(raw, None, "roof").unwrap().0
+    TriangleMesh::build(raw, None, "roof").unwrap().0
 }
 
 #[test]

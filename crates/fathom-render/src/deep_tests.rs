@@ -5,8 +5,9 @@
 use crate::zoom::ZoomPath;
 use fathom_core::Tape;
 use fathom_core::camera_path::path_preset;
+use fathom_image::compare::silhouette_iou;
 use fathom_svo::{DeepEye, OctreeView, OctreeViewConfig, RootSpec};
-use fathom_trace::deep::{silhouette_iou, zoom_frame_depths};
+use fathom_trace::deep::zoom_frame_depths;
 
 /// The octree's depths (None: sky) of the zoom's frame at `zoom`, settled.
 fn octree_depths(p: &ZoomPath, zoom: f64, w: u32, h: u32) -> (Vec<Option<f64>>, u8, DeepEye) {

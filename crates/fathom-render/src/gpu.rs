@@ -1,7 +1,7 @@
 //! The GPU backend of a session: the renderer and device (opened once), the tape uploaded only
 //! when it changed (a parameter edit is a parameter-buffer write; no buffer, bind group or
 //! pipeline is ever created for an edit), and the shared post effects on the frame read back:
-//! each eye's view through `fathom_trace::post::finish_view`, then the stereo layout and the
+//! each eye's view through `fathom_image::post::finish_view`, then the stereo layout and the
 //! region's crop. Regions are supported by rendering the whole frame and cropping it (the
 //! same pixels as the whole render, at the whole render's cost).
 
@@ -12,8 +12,8 @@ use crate::stats::{DeCounts, Stats, Timings};
 use fathom_core::frame::{Frame, Rect};
 use fathom_core::{Camera, Scene, Tape};
 use fathom_gpu::{GpuError, RenderOptions, Renderer};
-use fathom_trace::post::{self, PostParams};
-use fathom_trace::stereo;
+use fathom_image::post::{self, PostParams};
+use fathom_image::stereo;
 use std::time::Instant;
 
 /// Rows per band of a watched frame on a software adapter: about a second of lavapipe's time

@@ -14,8 +14,8 @@ use crate::session::{Counters, Rendered, report_done};
 use crate::stats::{OctreeStats, Stats, Timings};
 use fathom_core::frame::{Frame, Rect};
 use fathom_core::{Camera, Scene};
+use fathom_image::post::{self, PostParams};
 use fathom_svo::{FrameStats, OctreeError, OctreeView, OctreeViewConfig, SvoImage};
-use fathom_trace::post::{self, PostParams};
 use std::time::Instant;
 
 pub(crate) struct OctreeBackend {

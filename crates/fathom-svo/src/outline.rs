@@ -1,11 +1,13 @@
 //! Outline agreement with a sphere tracer and image similarity: the correctness experiments
-//! of the evaluation (silhouette IoU, false negatives, strict self-similarity).
+//! of the evaluation (silhouette IoU, false negatives, strict self-similarity). The figures
+//! are [`fathom_image::compare`]'s; this module renders the pictures they compare.
 
 use crate::error::OctreeError;
 use crate::octree_view::{OctreeView, OctreeViewConfig, SvoImage, Traversal};
 use fathom_core::eval::Evaluator;
 use fathom_core::scene::Scene;
 use fathom_core::{Camera, Tape, V3};
+use fathom_image::compare::{Overlap, packed_similarity};
 
 /// Silhouette of a plain f64 sphere tracer: a pixel is hit when its ray comes within `eps`
 /// pixel footprints of the surface (within 20 world units and 2000 steps).
@@ -47,7 +49,7 @@ pub fn trace_mask(
 /// Outline agreement of an octree render and a sphere tracer.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct Agreement {
-    /// Intersection over union of the two silhouettes.
+    /// Intersection over union of the two silhouettes (1 when neither hits anything).
     pub iou: f64,
     /// Pixels the tracer hits that the octree misses (false negatives).
     pub missed: usize,
@@ -73,11 +75,10 @@ pub fn agreement(
     ex.release_requests(&reqs);
     let svo = img.mask();
     let st = trace_mask(scene, cam, w, h, eps)?;
-    let inter = svo.iter().zip(&st).filter(|(a, b)| **a && **b).count();
-    let union = svo.iter().zip(&st).filter(|(a, b)| **a || **b).count();
+    let overlap = Overlap::of(svo.iter().copied(), st.iter().copied());
     Ok(Agreement {
-        iou: inter as f64 / union.max(1) as f64,
-        missed: svo.iter().zip(&st).filter(|(a, b)| !**a && **b).count(),
+        iou: overlap.iou(),
+        missed: overlap.only_b,
         tracer_hits: st.iter().filter(|&&h| h).count(),
         settle_frames,
     })
@@ -86,20 +87,5 @@ pub fn agreement(
 /// Fractions of pixels that are identical, and whose colours differ by at most `tol` (0..1)
 /// per channel, between two images of the same size.
 pub fn similarity(a: &SvoImage, b: &SvoImage, tol: f64) -> (f64, f64) {
-    let n = a.colour.len().max(1) as f64;
-    let mut same = 0usize;
-    let mut close = 0usize;
-    for (&x, &y) in a.colour.iter().zip(&b.colour) {
-        if x == y {
-            same += 1;
-        }
-        let ok = (0..3).all(|i| {
-            let (u, v) = ((x >> (8 * i)) & 255, (y >> (8 * i)) & 255);
-            (u as f64 - v as f64).abs() <= tol * 255.0
-        });
-        if ok {
-            close += 1;
-        }
-    }
-    (same as f64 / n, close as f64 / n)
+    packed_similarity(&a.colour, &b.colour, tol)
 }

@@ -43,7 +43,6 @@
 //! double precision it is the only valid reference for the colours of deep frames
 //! ([`zoom_frame`]).
 
-use crate::post;
 use crate::render::post_params;
 use crate::shade::{Shaded, Shading, shade_hits};
 use fathom_core::camera_path::CameraPath;
@@ -51,6 +50,8 @@ use fathom_core::dd::{Dd, dd3};
 use fathom_core::frame::{Frame, NO_ID, Rect};
 use fathom_core::real::Real;
 use fathom_core::{Camera, CameraFrame, Evaluator, Scene, Tape, V3};
+use fathom_image::compare::covers;
+use fathom_image::post;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -72,7 +73,7 @@ pub struct DeepOptions {
     /// inside the pixel, each marched with the pixel's own footprint (so `n` multiplies the
     /// cost by about `n^2`, not more). The pixel's colour is their mean; it is a hit, at the
     /// nearest of their depths, when at least half of them hit (the rule of the octree
-    /// frame's block reduction, `fathom_render::compare::reduce`).
+    /// frame's block reduction, `fathom_image::compare::reduce`).
     pub pixel_samples: u32,
 }
 
@@ -219,15 +220,9 @@ fn pixel_rays(
         .map(move |k| frame.ray_dir(x as f64 + at(k % n), y as f64 + at(k / n), width, height))
 }
 
-/// Whether a pixel made of `samples` rays (or, reduced, of `samples` pixels) of which `hits`
-/// hit counts as a hit: at least half of them. The reference's pixels and the octree frame's
-/// blocks (`fathom_render::compare::reduce`) must follow the same rule.
-pub fn covers(hits: u32, samples: u32) -> bool {
-    2 * hits >= samples
-}
-
 /// A pixel's depth from its rays' hits ([`pixel_rays`]): the nearest, when they cover it
-/// ([`covers`]).
+/// ([`covers`]: at least half of them, the rule
+/// [`fathom_image::compare::reduce`] applies to the octree frame's blocks).
 fn covered_depth(hits: impl Iterator<Item = Option<f64>>) -> Option<f64> {
     let (mut rays, mut count, mut nearest) = (0, 0, f64::INFINITY);
     for t in hits {
@@ -379,22 +374,6 @@ pub fn zoom_frame(
 /// The double-double eye of an f64 camera, for shallow views.
 pub fn eye_of(camera: &Camera) -> V3<Dd> {
     dd3(camera.eye)
-}
-
-/// Silhouette intersection over union of two depth images of the same size: pixels both hit
-/// over pixels either hits (1 when neither hits anything).
-pub fn silhouette_iou(a: &[Option<f64>], b: &[Option<f64>]) -> f64 {
-    assert_eq!(a.len(), b.len(), "depth images differ in size");
-    let (mut inter, mut union) = (0usize, 0usize);
-    for (x, y) in a.iter().zip(b) {
-        inter += (x.is_some() && y.is_some()) as usize;
-        union += (x.is_some() || y.is_some()) as usize;
-    }
-    if union == 0 {
-        1.0
-    } else {
-        inter as f64 / union as f64
-    }
 }
 
 #[cfg(test)]

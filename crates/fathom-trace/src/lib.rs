@@ -4,22 +4,25 @@
 //! - [`deep`]: a careful double-double reference tracer for small images at any zoom depth;
 //! - [`prepass`]: the multi-resolution cone-marching depth prepass;
 //! - [`shade`]: normals, materials, Blinn-Phong, soft shadows, AO, orbit traps, sky;
-//! - [`post`]: effects on a [`fathom_core::frame::Frame`] (fog, SSAO, tonemap, gamma);
-//! - [`output`]: PNG, mask, depth EXR and step heat-map files;
-//! - [`render`]: one frame end to end, tiles over rayon;
-//! - [`stereo`]: the side-by-side and top/bottom layouts of stereo views.
+//! - [`render`]: one frame end to end, tiles over rayon, finished by
+//!   [`fathom_image::post::finish_view`] and laid out by [`fathom_image::stereo`].
+//!
+//! [`output`], [`post`] and [`stereo`] are [`fathom_image`]'s modules, re-exported here so
+//! the command line's many `fathom_trace::output` paths keep working; new code uses
+//! `fathom_image` directly.
 
 pub mod deep;
-pub mod output;
-pub mod post;
 pub mod prepass;
 pub mod render;
 pub mod shade;
-pub mod stereo;
 pub mod tracer;
+
+pub use fathom_image::{output, post, stereo};
 
 pub use render::{Hooks, Options, OptionsError, Stats, TraceError, render, render_tape};
 pub use tracer::Method;
 
+#[cfg(test)]
+mod stereo_tests;
 #[cfg(test)]
 mod tests;

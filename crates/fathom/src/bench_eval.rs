@@ -1,7 +1,8 @@
 //! `fathom bench eval`: throughput of the tape interpreter on one thread, per preset, for the
 //! exact f64 scalar path, the f32x8 packet path and the double-double path (the deep-zoom
 //! estimator: ns per evaluation and its cost relative to f64), plus the cost of compiling a
-//! 100-node tree and of a parameter-only update. Prints JSON.
+//! 100-node tree and of a parameter-only update; with `--primitives`, each primitive alone on
+//! the f64 and f32x8 paths. Prints JSON.
 
 use clap::Args;
 use fathom_core::dd::{Dd, dd3};
@@ -20,6 +21,9 @@ pub struct EvalArgs {
     /// Only these presets (comma-separated); default: all.
     #[arg(long, value_delimiter = ',')]
     presets: Vec<String>,
+    /// Also measure each primitive alone (ns a point on the f64 and f32x8 paths).
+    #[arg(long)]
+    primitives: bool,
 }
 
 /// Deterministic sample points in a cube around the camera target, sized by the view distance,
@@ -103,6 +107,57 @@ fn eval_rates(tape: &Tape, pts: &[[f64; 3]], secs: f64) -> (f64, f64, f64, f64) 
     (scalar, packet, dd, dd4)
 }
 
+/// Nanoseconds a point of each primitive at its default parameters, on the f64 scalar path
+/// and the f32x8 packet path, over 4096 points in the cube [-2, 2]^3.
+fn primitive_costs(secs: f64) -> Vec<serde_json::Value> {
+    use fathom_core::primitives::Primitive;
+    use fathom_core::registry::Family;
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
+    };
+    let pts: Vec<V3<f64>> = (0..4096).map(|_| V3::new(next(), next(), next())).collect();
+    let packets: Vec<V3<F32x8>> = pts
+        .chunks_exact(8)
+        .map(|c| {
+            let lanes =
+                |f: fn(&V3<f64>) -> f64| F32x8::from_lanes(&c.iter().map(f).collect::<Vec<_>>());
+            V3::new(lanes(|p| p.x), lanes(|p| p.y), lanes(|p| p.z))
+        })
+        .collect();
+    let mut rows = Vec::new();
+    for &k in Primitive::ALL {
+        let def = k.def();
+        let mut a = Vec::new();
+        def.bake_into(&def.defaults(), &mut a);
+        let f64_rate = rate(secs, || {
+            for p in &pts {
+                black_box(k.distance::<f64>(*black_box(p), &a));
+            }
+        }) * pts.len() as f64;
+        let x8_rate = rate(secs, || {
+            for p in &packets {
+                black_box(k.distance::<F32x8>(*black_box(p), &a));
+            }
+        }) * pts.len() as f64;
+        eprintln!(
+            "{:>18}: f64 {:>6.2} ns  f32x8 {:>6.2} ns a point",
+            def.name,
+            1e9 / f64_rate,
+            1e9 / x8_rate
+        );
+        rows.push(json!({
+            "primitive": def.name,
+            "f64_ns_per_point": (1e11 / f64_rate).round() / 100.0,
+            "f32x8_ns_per_point": (1e11 / x8_rate).round() / 100.0,
+        }));
+    }
+    rows
+}
+
 pub fn run(a: EvalArgs) -> Result<(), String> {
     if !(a.seconds > 0.0 && a.seconds <= 60.0) {
         return Err(format!("--seconds = {} is out of range (0, 60]", a.seconds));
@@ -178,7 +233,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             k += 1;
             black_box(session.set_scene(shapes[k % 2].clone()).ok());
         });
-    let out = json!({
+    let mut out = json!({
         "bench": "eval",
         "threads": 1,
         "points_per_measurement": 4096,
@@ -193,6 +248,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "session_set_scene_structure_us": (set_structure * 10.0).round() / 10.0,
         },
     });
+    if a.primitives {
+        out["primitives"] = json!(primitive_costs(a.seconds));
+    }
     println!(
         "{}",
         serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?

@@ -10,7 +10,7 @@
 
 use clap::Args;
 use fathom_core::{Evaluator, Tape, V3, presets};
-use fathom_mesh::{Counter, Mesh, MeshError, MeshOptions, MeshSink, Method, Vertex, Window};
+use fathom_mesh::{Counter, IsoMesh, IsoMeshError, MeshOptions, MeshSink, Method, Vertex, Window};
 use glam::DVec3;
 use std::path::PathBuf;
 use std::process::Command;
@@ -62,7 +62,7 @@ struct Probe<'a> {
 }
 
 impl MeshSink for Probe<'_> {
-    fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError> {
+    fn vertices(&mut self, v: &[Vertex]) -> Result<(), IsoMeshError> {
         for x in v {
             if self.seen.is_multiple_of(61) {
                 let p = x.p.map(|c| c as f64);
@@ -75,10 +75,10 @@ impl MeshSink for Probe<'_> {
         }
         self.inner.vertices(v)
     }
-    fn triangles(&mut self, t: &[[u32; 3]], w: &Window) -> Result<(), MeshError> {
+    fn triangles(&mut self, t: &[[u32; 3]], w: &Window) -> Result<(), IsoMeshError> {
         self.inner.triangles(t, w)
     }
-    fn finish(&mut self) -> Result<(), MeshError> {
+    fn finish(&mut self) -> Result<(), IsoMeshError> {
         self.inner.finish()
     }
 }
@@ -188,7 +188,7 @@ fn sphere_hausdorff(method: Method, res: u32) -> Result<serde_json::Value, Strin
         ..MeshOptions::default()
     };
     let plan = fathom_mesh::plan(&scene, &tape, &o).map_err(|e| e.to_string())?;
-    let mut m = Mesh::default();
+    let mut m = IsoMesh::default();
     fathom_mesh::mesh(&scene, &tape, &plan, &o, &mut m, &|_, _| {}).map_err(|e| e.to_string())?;
     let sdf = |p: DVec3| p.length() - 0.9;
     let samples: Vec<DVec3> = (0..4000)

@@ -4,7 +4,7 @@
 //! the JSON, which comes first.
 
 use super::{Spool, commit, create_output, io_err};
-use crate::{MeshError, MeshSink, Vertex, Window};
+use crate::{IsoMeshError, MeshSink, Vertex, Window};
 use fathom_core::atomic_file::AtomicFile;
 use gltf_json as json;
 use json::validation::Checked::Valid;
@@ -25,7 +25,7 @@ pub struct GlbSink {
 }
 
 impl GlbSink {
-    pub fn create(path: &Path) -> Result<Self, MeshError> {
+    pub fn create(path: &Path) -> Result<Self, IsoMeshError> {
         let out = create_output(path)?;
         Ok(GlbSink {
             path: path.into(),
@@ -53,7 +53,7 @@ fn linear8(s: u8) -> u8 {
 }
 
 impl MeshSink for GlbSink {
-    fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError> {
+    fn vertices(&mut self, v: &[Vertex]) -> Result<(), IsoMeshError> {
         let mut p = Vec::with_capacity(v.len() * 12);
         let mut c = Vec::with_capacity(v.len() * 4);
         for x in v {
@@ -70,7 +70,7 @@ impl MeshSink for GlbSink {
         self.colours.write(&c)
     }
 
-    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), MeshError> {
+    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), IsoMeshError> {
         let mut b = Vec::with_capacity(t.len() * 12);
         for tri in t {
             for i in tri {
@@ -81,11 +81,11 @@ impl MeshSink for GlbSink {
         self.indices.write(&b)
     }
 
-    fn finish(&mut self) -> Result<(), MeshError> {
+    fn finish(&mut self) -> Result<(), IsoMeshError> {
         let (pos_len, col_len, idx_len) = (self.nv * 12, self.nv * 4, self.ni * 4);
         let bin_len = pos_len + col_len + idx_len;
         let root = self.json(pos_len, col_len, idx_len);
-        let mut text = json::serialize::to_string(&root).map_err(|e| MeshError::Format {
+        let mut text = json::serialize::to_string(&root).map_err(|e| IsoMeshError::Format {
             path: self.path.display().to_string(),
             msg: e.to_string(),
         })?;
@@ -94,7 +94,7 @@ impl MeshSink for GlbSink {
         }
         let total = 12 + 8 + text.len() as u64 + 8 + bin_len;
         if total > u32::MAX as u64 {
-            return Err(MeshError::Format {
+            return Err(IsoMeshError::Format {
                 path: self.path.display().to_string(),
                 msg: format!(
                     "the GLB would be {total} bytes; GLB files hold at most 4 GiB (use .ply)"

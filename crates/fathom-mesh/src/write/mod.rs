@@ -17,7 +17,7 @@ mod obj;
 mod ply;
 mod stl;
 
-use crate::{MeshError, MeshSink};
+use crate::{IsoMeshError, MeshSink};
 use fathom_core::atomic_file::AtomicFile;
 use fathom_core::cleanup::Pending;
 use std::fs::File;
@@ -42,7 +42,7 @@ impl Format {
     ];
 
     /// The format of `path` by its extension.
-    pub fn of(path: &Path) -> Result<Format, MeshError> {
+    pub fn of(path: &Path) -> Result<Format, IsoMeshError> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -52,7 +52,7 @@ impl Format {
             .iter()
             .find(|(_, e)| *e == ext)
             .map(|(f, _)| *f)
-            .ok_or_else(|| MeshError::Format {
+            .ok_or_else(|| IsoMeshError::Format {
                 path: path.display().to_string(),
                 msg: format!(
                     "unknown mesh format `.{ext}`; valid choices: {}",
@@ -63,7 +63,7 @@ impl Format {
 }
 
 /// Opens a sink writing `path` in the format its extension names (the file is created now).
-pub fn create(path: &Path) -> Result<Box<dyn MeshSink>, MeshError> {
+pub fn create(path: &Path) -> Result<Box<dyn MeshSink>, IsoMeshError> {
     Ok(match Format::of(path)? {
         Format::Ply => Box::new(ply::PlySink::create(path)?),
         Format::Stl => Box::new(stl::StlSink::create(path)?),
@@ -72,8 +72,8 @@ pub fn create(path: &Path) -> Result<Box<dyn MeshSink>, MeshError> {
     })
 }
 
-fn io_err(path: &Path) -> impl Fn(std::io::Error) -> MeshError + '_ {
-    move |source| MeshError::Io {
+fn io_err(path: &Path) -> impl Fn(std::io::Error) -> IsoMeshError + '_ {
+    move |source| IsoMeshError::Io {
         path: path.display().to_string(),
         source,
     }
@@ -90,7 +90,7 @@ struct Spool {
 }
 
 impl Spool {
-    fn create(out: &Path, tag: &str) -> Result<Spool, MeshError> {
+    fn create(out: &Path, tag: &str) -> Result<Spool, IsoMeshError> {
         let mut name = out.file_name().unwrap_or_default().to_os_string();
         name.push(format!(".{tag}.part"));
         let path = out.with_file_name(name);
@@ -104,7 +104,7 @@ impl Spool {
         })
     }
 
-    fn write(&mut self, b: &[u8]) -> Result<(), MeshError> {
+    fn write(&mut self, b: &[u8]) -> Result<(), IsoMeshError> {
         self.bytes += b.len() as u64;
         let path = self.path.clone();
         self.w
@@ -115,7 +115,7 @@ impl Spool {
     }
 
     /// Flushes and reopens the spool for reading.
-    fn reader(&mut self) -> Result<BufReader<File>, MeshError> {
+    fn reader(&mut self) -> Result<BufReader<File>, IsoMeshError> {
         if let Some(mut w) = self.w.take() {
             w.flush().map_err(io_err(&self.path))?;
         }
@@ -124,7 +124,7 @@ impl Spool {
     }
 
     /// Appends the whole spool to `out`.
-    fn copy_to(&mut self, out: &mut impl Write, out_path: &Path) -> Result<(), MeshError> {
+    fn copy_to(&mut self, out: &mut impl Write, out_path: &Path) -> Result<(), IsoMeshError> {
         let mut r = self.reader()?;
         let mut buf = vec![0u8; 1 << 20];
         loop {
@@ -148,12 +148,12 @@ impl Drop for Spool {
 /// Creates the output's temporary file (see [`fathom_core::atomic_file`]): the sink fills
 /// it and commits it in `finish`, so a refused, failed or interrupted run leaves an existing
 /// file as it was.
-fn create_output(path: &Path) -> Result<AtomicFile, MeshError> {
+fn create_output(path: &Path) -> Result<AtomicFile, IsoMeshError> {
     Ok(AtomicFile::create(path)?)
 }
 
 /// Flushes `w` and renames its file into place.
-fn commit(w: BufWriter<AtomicFile>, path: &Path) -> Result<(), MeshError> {
+fn commit(w: BufWriter<AtomicFile>, path: &Path) -> Result<(), IsoMeshError> {
     let f = w.into_inner().map_err(|e| io_err(path)(e.into_error()))?;
     Ok(f.commit()?)
 }

@@ -2,7 +2,7 @@
 //! Blender and tobj read) as vertices arrive, `f a b c` lines (1-based) as triangles do.
 
 use super::{commit, create_output, io_err};
-use crate::{MeshError, MeshSink, Vertex, Window};
+use crate::{IsoMeshError, MeshSink, Vertex, Window};
 use fathom_core::atomic_file::AtomicFile;
 use std::fmt::Write as _;
 use std::io::{BufWriter, Write};
@@ -14,7 +14,7 @@ pub struct ObjSink {
 }
 
 impl ObjSink {
-    pub fn create(path: &Path) -> Result<Self, MeshError> {
+    pub fn create(path: &Path) -> Result<Self, IsoMeshError> {
         let f = create_output(path)?;
         let mut w = BufWriter::with_capacity(1 << 20, f);
         w.write_all(b"# made by fathom\n").map_err(io_err(path))?;
@@ -26,7 +26,7 @@ impl ObjSink {
 }
 
 impl MeshSink for ObjSink {
-    fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError> {
+    fn vertices(&mut self, v: &[Vertex]) -> Result<(), IsoMeshError> {
         let mut s = String::with_capacity(v.len() * 48);
         for x in v {
             let c = x.colour.map(|c| c as f32 / 255.0);
@@ -43,7 +43,7 @@ impl MeshSink for ObjSink {
             .map_err(io_err(&self.path))
     }
 
-    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), MeshError> {
+    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), IsoMeshError> {
         let mut s = String::with_capacity(t.len() * 32);
         for tri in t {
             let _ = writeln!(
@@ -61,7 +61,7 @@ impl MeshSink for ObjSink {
             .map_err(io_err(&self.path))
     }
 
-    fn finish(&mut self) -> Result<(), MeshError> {
+    fn finish(&mut self) -> Result<(), IsoMeshError> {
         let w = self.w.take().expect("finish called once");
         commit(w, &self.path)
     }

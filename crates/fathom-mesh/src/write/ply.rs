@@ -2,7 +2,7 @@
 //! `uchar` counts of `uint` indices: the layout MeshLab, Blender and most slicers read.
 
 use super::{Spool, commit, create_output, io_err};
-use crate::{MeshError, MeshSink, Vertex, Window};
+use crate::{IsoMeshError, MeshSink, Vertex, Window};
 use fathom_core::atomic_file::AtomicFile;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -17,7 +17,7 @@ pub struct PlySink {
 }
 
 impl PlySink {
-    pub fn create(path: &Path) -> Result<Self, MeshError> {
+    pub fn create(path: &Path) -> Result<Self, IsoMeshError> {
         let out = create_output(path)?;
         Ok(PlySink {
             path: path.into(),
@@ -31,7 +31,7 @@ impl PlySink {
 }
 
 impl MeshSink for PlySink {
-    fn vertices(&mut self, v: &[Vertex]) -> Result<(), MeshError> {
+    fn vertices(&mut self, v: &[Vertex]) -> Result<(), IsoMeshError> {
         let mut b = Vec::with_capacity(v.len() * 15);
         for x in v {
             for c in x.p {
@@ -43,7 +43,7 @@ impl MeshSink for PlySink {
         self.verts.write(&b)
     }
 
-    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), MeshError> {
+    fn triangles(&mut self, t: &[[u32; 3]], _: &Window) -> Result<(), IsoMeshError> {
         let mut b = Vec::with_capacity(t.len() * 13);
         for tri in t {
             b.push(3);
@@ -55,7 +55,7 @@ impl MeshSink for PlySink {
         self.faces.write(&b)
     }
 
-    fn finish(&mut self) -> Result<(), MeshError> {
+    fn finish(&mut self) -> Result<(), IsoMeshError> {
         let out = self.out.take().expect("finish called once");
         let mut w = BufWriter::with_capacity(1 << 20, out);
         let header = format!(

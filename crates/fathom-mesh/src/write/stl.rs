@@ -3,7 +3,7 @@
 //! `stl_io::write_stl` as an exact-size iterator at the end.
 
 use super::{Spool, commit, create_output, io_err};
-use crate::{MeshError, MeshSink, Vertex, Window};
+use crate::{IsoMeshError, MeshSink, Vertex, Window};
 use fathom_core::atomic_file::AtomicFile;
 use std::fs::File;
 use std::io::{BufReader, Read};
@@ -17,7 +17,7 @@ pub struct StlSink {
 }
 
 impl StlSink {
-    pub fn create(path: &Path) -> Result<Self, MeshError> {
+    pub fn create(path: &Path) -> Result<Self, IsoMeshError> {
         let out = create_output(path)?;
         Ok(StlSink {
             path: path.into(),
@@ -29,11 +29,11 @@ impl StlSink {
 }
 
 impl MeshSink for StlSink {
-    fn vertices(&mut self, _: &[Vertex]) -> Result<(), MeshError> {
+    fn vertices(&mut self, _: &[Vertex]) -> Result<(), IsoMeshError> {
         Ok(())
     }
 
-    fn triangles(&mut self, t: &[[u32; 3]], window: &Window) -> Result<(), MeshError> {
+    fn triangles(&mut self, t: &[[u32; 3]], window: &Window) -> Result<(), IsoMeshError> {
         let mut b = Vec::with_capacity(t.len() * 36);
         for tri in t {
             for &i in tri {
@@ -46,9 +46,9 @@ impl MeshSink for StlSink {
         self.tris.write(&b)
     }
 
-    fn finish(&mut self) -> Result<(), MeshError> {
+    fn finish(&mut self) -> Result<(), IsoMeshError> {
         if self.count > u32::MAX as u64 {
-            return Err(MeshError::Format {
+            return Err(IsoMeshError::Format {
                 path: self.path.display().to_string(),
                 msg: format!(
                     "{} triangles; binary STL holds at most {}",
@@ -76,7 +76,7 @@ impl MeshSink for StlSink {
 struct Triangles {
     r: BufReader<File>,
     left: usize,
-    error: Option<MeshError>,
+    error: Option<IsoMeshError>,
 }
 
 impl Iterator for Triangles {
@@ -88,7 +88,7 @@ impl Iterator for Triangles {
         self.left -= 1;
         let mut b = [0u8; 36];
         if let Err(source) = self.r.read_exact(&mut b) {
-            self.error.get_or_insert(MeshError::Io {
+            self.error.get_or_insert(IsoMeshError::Io {
                 path: "triangle spool".into(),
                 source,
             });

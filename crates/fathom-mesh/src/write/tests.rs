@@ -2,13 +2,13 @@
 //! the mesh that was streamed into it.
 
 use super::create;
-use crate::{Mesh, MeshOptions, Method, mesh, plan};
+use crate::{IsoMesh, MeshOptions, Method, mesh, plan};
 use fathom_core::primitives::Primitive;
 use fathom_core::{Call, Node, Scene, Tape};
 use glam::DVec3;
 use std::path::PathBuf;
 
-fn torus_mesh_into(path: Option<&std::path::Path>) -> Mesh {
+fn torus_mesh_into(path: Option<&std::path::Path>) -> IsoMesh {
     let scene = Scene::new(Node::new(
         Call::new(Primitive::Torus)
             .with("major", &[0.8])
@@ -22,7 +22,7 @@ fn torus_mesh_into(path: Option<&std::path::Path>) -> Mesh {
         ..MeshOptions::default()
     };
     let p = plan(&scene, &tape, &o).unwrap();
-    let mut m = Mesh::default();
+    let mut m = IsoMesh::default();
     mesh(&scene, &tape, &p, &o, &mut m, &|_, _| {}).unwrap();
     if let Some(path) = path {
         let mut sink = create(path).unwrap();
@@ -133,7 +133,7 @@ fn unknown_extensions_and_unwritable_paths_fail_at_once() {
     let e = create(std::path::Path::new("/nonexistent-dir/x.ply"))
         .err()
         .unwrap();
-    assert!(matches!(e, crate::MeshError::Write(_)), "{e}");
+    assert!(matches!(e, crate::IsoMeshError::Write(_)), "{e}");
     assert!(e.to_string().contains("does not exist"), "{e}");
 }
 

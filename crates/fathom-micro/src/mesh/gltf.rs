@@ -5,7 +5,7 @@
 //! need; accessor counts are checked against the limits before any vertex is read.
 
 use super::{RawMesh, check_counts, read_limited};
-use crate::error::MeshError;
+use crate::error::MeshLoadError;
 use crate::limits;
 use base64::Engine;
 use glam::{DMat3, DMat4, DVec2, DVec3};
@@ -13,13 +13,13 @@ use std::collections::HashSet;
 use std::path::Path;
 
 /// Reads a `.gltf` or `.glb` file.
-pub fn load(path: &Path) -> Result<RawMesh, MeshError> {
+pub fn load(path: &Path) -> Result<RawMesh, MeshLoadError> {
     let bytes = read_limited(path)?;
     parse(&bytes, path.parent(), &path.display().to_string())
 }
 
-fn invalid(origin: &str, msg: impl Into<String>) -> MeshError {
-    MeshError::Invalid {
+fn invalid(origin: &str, msg: impl Into<String>) -> MeshLoadError {
+    MeshLoadError::Invalid {
         origin: origin.into(),
         msg: msg.into(),
     }
@@ -34,7 +34,7 @@ fn invalid(origin: &str, msg: impl Into<String>) -> MeshError {
 /// - an accessor of count 0 (the spec's minimum is 1; its reader computes `count - 1`);
 /// - a buffer view whose stride is smaller than an element of an accessor reading it (a debug
 ///   assertion in its reader).
-fn check_before_validation(json: &gltf::json::Root, origin: &str) -> Result<(), MeshError> {
+fn check_before_validation(json: &gltf::json::Root, origin: &str) -> Result<(), MeshLoadError> {
     use gltf::json::accessor::{ComponentType as C, Type as T};
     use gltf::json::validation::Checked;
     let n = json.accessors.len();
@@ -147,7 +147,7 @@ fn component_name(c: gltf::json::accessor::ComponentType) -> &'static str {
 }
 
 /// Parses glTF or GLB bytes; external buffers are looked up relative to `dir`.
-pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, MeshError> {
+pub fn parse(bytes: &[u8], dir: Option<&Path>, origin: &str) -> Result<RawMesh, MeshLoadError> {
     let not_gltf = |e: gltf::Error| invalid(origin, format!("not a valid glTF 2.0 file: {e}"));
     let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(not_gltf)?;
     let json = raw.document.into_json();
@@ -320,7 +320,7 @@ fn node_name(n: &gltf::Node) -> String {
 fn instances<'a>(
     doc: &'a gltf::Gltf,
     origin: &str,
-) -> Result<Vec<(gltf::Mesh<'a>, DMat4)>, MeshError> {
+) -> Result<Vec<(gltf::Mesh<'a>, DMat4)>, MeshLoadError> {
     let Some(scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
         return Ok(doc.meshes().map(|m| (m, DMat4::IDENTITY)).collect());
     };
@@ -422,7 +422,7 @@ fn instances<'a>(
 /// every such view inside its buffer, with the byte ranges in the message (the `gltf`
 /// crate's reader returns nothing for an accessor past its data, which would read as a
 /// primitive without positions). Only called after the counts passed the limits.
-fn check_ranges(instances: &[(gltf::Mesh, DMat4)], origin: &str) -> Result<(), MeshError> {
+fn check_ranges(instances: &[(gltf::Mesh, DMat4)], origin: &str) -> Result<(), MeshLoadError> {
     let mut seen = HashSet::new();
     for (mesh, _) in instances {
         for (k, p) in mesh

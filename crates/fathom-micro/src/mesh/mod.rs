@@ -3,7 +3,7 @@
 //! triangle corner (so UV seams stay seams without splitting positions).
 //!
 //! Loaders ([`obj`], [`gltf`]) and generators ([`teapot`], [`bush`]) produce a [`RawMesh`];
-//! [`Mesh::build`] cleans it: triangles with non-finite vertices, degenerate triangles and
+//! [`TriangleMesh::build`] cleans it: triangles with non-finite vertices, degenerate triangles and
 //! triangles whose UVs have zero area are skipped and counted in the [`MeshReport`]; edges
 //! shared by more than two triangles (non-manifold) are counted; missing normals are computed
 //! (angle-weighted); missing UVs come from a chosen [`UvProjection`] or give a clear error.
@@ -15,7 +15,7 @@ pub mod obj;
 pub mod teapot;
 pub mod uv;
 
-use crate::error::MeshError;
+use crate::error::MeshLoadError;
 use crate::limits;
 use glam::{DVec2, DVec3};
 use std::collections::HashMap;
@@ -34,7 +34,7 @@ pub struct RawMesh {
 
 /// A cleaned mesh: welded positions, one unit normal per position, UVs per triangle corner.
 #[derive(Clone, Debug)]
-pub struct Mesh {
+pub struct TriangleMesh {
     pub positions: Vec<DVec3>,
     pub normals: Vec<DVec3>,
     pub triangles: Vec<[u32; 3]>,
@@ -90,7 +90,10 @@ pub const BUILTINS: &[(&str, &str)] = &[
 
 /// Loads a mesh file (`.obj`, `.gltf`, `.glb`) or a built-in mesh by name. `uv` overrides the
 /// file's UVs (and is required when the file has none).
-pub fn load(spec: &str, uv: Option<UvProjection>) -> Result<(Mesh, MeshReport), MeshError> {
+pub fn load(
+    spec: &str,
+    uv: Option<UvProjection>,
+) -> Result<(TriangleMesh, MeshReport), MeshLoadError> {
     let path = Path::new(spec);
     let ext = path
         .extension()
@@ -103,7 +106,7 @@ pub fn load(spec: &str, uv: Option<UvProjection>) -> Result<(Mesh, MeshReport), 
             "bush" => bush::raw(bush::DEFAULT_DIVISIONS),
             "triangle" => triangle(),
             _ => {
-                return Err(MeshError::UnknownFormat {
+                return Err(MeshLoadError::UnknownFormat {
                     origin: spec.into(),
                     ext: ext.unwrap_or_default(),
                     builtins: BUILTINS.iter().map(|b| b.0).collect::<Vec<_>>().join(", "),
@@ -111,7 +114,7 @@ pub fn load(spec: &str, uv: Option<UvProjection>) -> Result<(Mesh, MeshReport), 
             }
         },
     };
-    Mesh::build(raw, uv, spec)
+    TriangleMesh::build(raw, uv, spec)
 }
 
 /// One triangle in the xz plane, facing +y, with planar UVs equal to (x, z).
@@ -131,13 +134,13 @@ pub fn triangle() -> RawMesh {
 }
 
 /// Checks counts against the limits before anything is allocated for them.
-pub fn check_counts(origin: &str, vertices: u64, triangles: u64) -> Result<(), MeshError> {
+pub fn check_counts(origin: &str, vertices: u64, triangles: u64) -> Result<(), MeshLoadError> {
     for (what, count, max) in [
         ("vertices", vertices, limits::MAX_VERTICES),
         ("triangles", triangles, limits::MAX_TRIANGLES),
     ] {
         if count > max {
-            return Err(MeshError::TooLarge {
+            return Err(MeshLoadError::TooLarge {
                 origin: origin.into(),
                 what,
                 count,
@@ -153,13 +156,13 @@ fn weld_key(p: DVec3) -> [u64; 3] {
     [p.x, p.y, p.z].map(|c| (c + 0.0).to_bits())
 }
 
-impl Mesh {
+impl TriangleMesh {
     /// Cleans a raw mesh (see the module doc). `origin` names the source in errors.
     pub fn build(
         raw: RawMesh,
         uv: Option<UvProjection>,
         origin: &str,
-    ) -> Result<(Mesh, MeshReport), MeshError> {
+    ) -> Result<(TriangleMesh, MeshReport), MeshLoadError> {
         check_counts(
             origin,
             raw.positions.len() as u64,
@@ -175,7 +178,7 @@ impl Mesh {
             .flatten()
             .find(|&&i| i as usize >= raw.positions.len());
         if let Some(i) = bad_index {
-            return Err(MeshError::Invalid {
+            return Err(MeshLoadError::Invalid {
                 origin: origin.into(),
                 msg: format!(
                     "a triangle refers to vertex {i}, but the mesh has {} vertices",
@@ -184,7 +187,7 @@ impl Mesh {
             });
         }
         if uv.is_none() && raw.corner_uvs.is_none() {
-            return Err(MeshError::NoUvs {
+            return Err(MeshLoadError::NoUvs {
                 origin: origin.into(),
             });
         }
@@ -257,7 +260,7 @@ impl Mesh {
         }
         if kept.is_empty() {
             report.triangles = 0;
-            return Err(MeshError::Empty {
+            return Err(MeshLoadError::Empty {
                 origin: origin.into(),
                 report: report.to_string(),
             });
@@ -285,7 +288,7 @@ impl Mesh {
         report.triangles = kept.len();
         report.vertices = compact.len();
         Ok((
-            Mesh {
+            TriangleMesh {
                 positions: compact,
                 normals,
                 triangles: kept,
@@ -334,13 +337,13 @@ mod tests;
 
 /// Reads a file, refusing it before reading when it exceeds [`limits::MAX_MESH_FILE_BYTES`]
 /// or is not a regular file (a FIFO would block, a device such as `/dev/zero` never ends).
-pub fn read_limited(path: &Path) -> Result<Vec<u8>, MeshError> {
+pub fn read_limited(path: &Path) -> Result<Vec<u8>, MeshLoadError> {
     use fathom_core::input_file::{self, ReadError};
     let origin = path.display().to_string();
     input_file::read(path, limits::MAX_MESH_FILE_BYTES).map_err(|e| match e {
-        ReadError::TooLarge { size, .. } => MeshError::FileTooLarge { origin, size },
-        ReadError::Io { source, .. } => MeshError::Io { origin, source },
-        ReadError::NotAFile { kind, .. } => MeshError::Invalid {
+        ReadError::TooLarge { size, .. } => MeshLoadError::FileTooLarge { origin, size },
+        ReadError::Io { source, .. } => MeshLoadError::Io { origin, source },
+        ReadError::NotAFile { kind, .. } => MeshLoadError::Invalid {
             origin,
             msg: format!("it is a {kind}, not a regular file; it was not read"),
         },

@@ -5,20 +5,20 @@
 //! anything is allocated for them. Only text that passed reaches `tobj`.
 
 use super::{RawMesh, check_counts};
-use crate::error::MeshError;
+use crate::error::MeshLoadError;
 use crate::limits;
 use glam::{DVec2, DVec3};
 use std::path::Path;
 
 /// Reads an OBJ file, refusing oversized files before reading them.
-pub fn load(path: &Path) -> Result<RawMesh, MeshError> {
+pub fn load(path: &Path) -> Result<RawMesh, MeshLoadError> {
     let text = super::read_limited(path)?;
     let origin = path.display().to_string();
     let text = String::from_utf8(text).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let line = valid.iter().filter(|&&b| b == b'\n').count() + 1;
         let col = valid.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
-        MeshError::Syntax {
+        MeshLoadError::Syntax {
             origin: origin.clone(),
             line,
             col,
@@ -38,10 +38,10 @@ pub struct Counts {
 }
 
 /// Checks every line `tobj` will read; counts vertices and triangles.
-pub fn scan(text: &str, origin: &str) -> Result<Counts, MeshError> {
+pub fn scan(text: &str, origin: &str) -> Result<Counts, MeshLoadError> {
     let mut c = Counts::default();
     for (n, line) in text.lines().enumerate() {
-        let at = |col_byte: usize, msg: String| MeshError::Syntax {
+        let at = |col_byte: usize, msg: String| MeshLoadError::Syntax {
             origin: origin.into(),
             line: n + 1,
             col: line[..col_byte.min(line.len())].chars().count() + 1,
@@ -55,7 +55,7 @@ pub fn scan(text: &str, origin: &str) -> Result<Counts, MeshError> {
         let Some(&(_, kw)) = words.first() else {
             continue;
         };
-        let floats = |from: usize, need: usize, what: &str| -> Result<Vec<f64>, MeshError> {
+        let floats = |from: usize, need: usize, what: &str| -> Result<Vec<f64>, MeshLoadError> {
             let mut out = Vec::new();
             for i in from..from + need {
                 let Some(&(off, w)) = words.get(i) else {
@@ -157,7 +157,7 @@ fn check_face_vertex(w: &str, c: &Counts) -> Result<(), String> {
 }
 
 /// Parses OBJ text; `origin` names it in errors.
-pub fn parse(text: &str, origin: &str) -> Result<RawMesh, MeshError> {
+pub fn parse(text: &str, origin: &str) -> Result<RawMesh, MeshLoadError> {
     let counts = scan(text, origin)?;
     check_counts(origin, counts.positions, counts.triangles)?;
     let opts = tobj::LoadOptions {
@@ -169,7 +169,7 @@ pub fn parse(text: &str, origin: &str) -> Result<RawMesh, MeshError> {
     let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| {
         Err(tobj::LoadError::OpenFileFailed)
     })
-    .map_err(|e| MeshError::Invalid {
+    .map_err(|e| MeshLoadError::Invalid {
         origin: origin.into(),
         msg: format!("the OBJ reader refused the file: {e}"),
     })?;

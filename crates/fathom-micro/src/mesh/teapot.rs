@@ -3,7 +3,7 @@
 //!
 //! Patches share their boundary control points, and a Bernstein evaluation at u = 0 or 1 reads
 //! only that boundary row with exact weights, so neighbouring patches produce bit-identical
-//! seam vertices, which [`super::Mesh::build`] welds. The collapsed rows at the lid's knob and
+//! seam vertices, which [`super::TriangleMesh::build`] welds. The collapsed rows at the lid's knob and
 //! the bottom's centre give degenerate triangles, skipped (and counted) there. UVs run over each
 //! patch with a whole number of tiles per side, about `tile` world units each, so tiles meet
 //! at patch seams. The teapot is turned y-up, scaled by 0.5 and centred on the origin.

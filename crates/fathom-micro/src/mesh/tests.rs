@@ -1,5 +1,5 @@
 use super::*;
-use crate::error::MeshError;
+use crate::error::MeshLoadError;
 use proptest::prelude::*;
 
 const QUAD: &str = "# a unit quad in the xz plane, two triangles
@@ -27,7 +27,7 @@ fn temp(name: &str, contents: &[u8]) -> std::path::PathBuf {
 fn obj_quad_loads_with_uvs_and_normals() {
     let raw = obj::parse(QUAD, "quad.obj").unwrap();
     assert_eq!(raw.triangles.len(), 2);
-    let (m, r) = Mesh::build(raw, None, "quad.obj").unwrap();
+    let (m, r) = TriangleMesh::build(raw, None, "quad.obj").unwrap();
     assert_eq!((r.triangles, r.vertices, r.normals_computed), (2, 4, false));
     assert_eq!(r.uv_source, "file");
     assert!(m.normals.iter().all(|n| (*n - DVec3::Y).length() < 1e-12));
@@ -40,7 +40,7 @@ fn obj_quad_loads_with_uvs_and_normals() {
 
 fn syntax(text: &str) -> (usize, usize, String) {
     match obj::parse(text, "bad.obj") {
-        Err(MeshError::Syntax { line, col, msg, .. }) => (line, col, msg),
+        Err(MeshLoadError::Syntax { line, col, msg, .. }) => (line, col, msg),
         other => panic!("expected a syntax error for {text:?}, got {other:?}"),
     }
 }
@@ -89,7 +89,7 @@ fn missing_oversized_and_unknown_files_are_refused_clearly() {
         .set_len(limits::MAX_MESH_FILE_BYTES + 1)
         .unwrap();
     let e = load(p.to_str().unwrap(), None).unwrap_err();
-    assert!(matches!(e, MeshError::FileTooLarge { .. }), "{e}");
+    assert!(matches!(e, MeshLoadError::FileTooLarge { .. }), "{e}");
     let _ = std::fs::remove_file(&p);
     let e = load("thing.stl", None).unwrap_err().to_string();
     assert!(e.contains("obj, gltf, glb") && e.contains("teapot"), "{e}");
@@ -109,7 +109,7 @@ fn meshes_over_the_size_limit_are_refused_before_allocation() {
     assert!(
         matches!(
             e,
-            MeshError::TooLarge {
+            MeshLoadError::TooLarge {
                 what: "triangles",
                 ..
             }
@@ -134,7 +134,7 @@ f 1/1 2/2 7/3
 f 2/1 1/2 8/3
 ";
     let raw = obj::parse(text, "mixed.obj").unwrap();
-    let (m, r) = Mesh::build(raw, None, "mixed.obj").unwrap();
+    let (m, r) = TriangleMesh::build(raw, None, "mixed.obj").unwrap();
     assert_eq!(r.input_triangles, 7);
     assert_eq!(
         (
@@ -155,7 +155,7 @@ f 2/1 1/2 8/3
 fn meshes_without_uvs_need_a_projection() {
     let text = "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 0 1 0\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
     let raw = obj::parse(text, "tet.obj").unwrap();
-    let e = Mesh::build(raw.clone(), None, "tet.obj")
+    let e = TriangleMesh::build(raw.clone(), None, "tet.obj")
         .unwrap_err()
         .to_string();
     assert!(
@@ -163,7 +163,7 @@ fn meshes_without_uvs_need_a_projection() {
         "{e}"
     );
     for (proj, _) in uv::PROJECTIONS {
-        let (m, r) = Mesh::build(raw.clone(), Some(*proj), "tet.obj").unwrap();
+        let (m, r) = TriangleMesh::build(raw.clone(), Some(*proj), "tet.obj").unwrap();
         assert_eq!(r.skipped_zero_uv_area + r.triangles, 4, "{}", proj.name());
         assert!(r.normals_computed);
         assert!(m.uvs.iter().flatten().all(|u| u.is_finite()));
@@ -221,7 +221,7 @@ fn gltf_with_an_embedded_buffer_loads_with_its_node_transform() {
         "translation applied"
     );
     assert!(raw.corner_uvs.is_none());
-    let (_, r) = Mesh::build(raw, Some(UvProjection::Planar), "tri.gltf").unwrap();
+    let (_, r) = TriangleMesh::build(raw, Some(UvProjection::Planar), "tri.gltf").unwrap();
     assert_eq!(r.triangles, 1);
     // Out-of-range indices and broken JSON are clear errors.
     let bad = gltf_json(
@@ -325,9 +325,9 @@ proptest! {
         let text = lines.join("\n");
         match obj::parse(&text, "fuzz.obj") {
             Ok(raw) => {
-                let _ = Mesh::build(raw, Some(UvProjection::Box), "fuzz.obj");
+                let _ = TriangleMesh::build(raw, Some(UvProjection::Box), "fuzz.obj");
             }
-            Err(MeshError::Syntax { line, col, .. }) => {
+            Err(MeshLoadError::Syntax { line, col, .. }) => {
                 prop_assert!(line >= 1 && line <= lines.len().max(1));
                 prop_assert!(col >= 1);
             }
@@ -438,7 +438,7 @@ proptest! {
             Ok(raw) => {
                 let n = raw.positions.len();
                 prop_assert!(raw.triangles.iter().flatten().all(|&i| (i as usize) < n));
-                let _ = Mesh::build(raw, Some(UvProjection::Box), "fuzz.gltf");
+                let _ = TriangleMesh::build(raw, Some(UvProjection::Box), "fuzz.gltf");
             }
             Err(e) => prop_assert!(e.to_string().contains("fuzz.gltf"), "{}", e),
         }
@@ -478,7 +478,7 @@ fn obj_corpus_replays() {
     ];
     for text in corpus {
         if let Ok(raw) = obj::parse(text, "corpus.obj") {
-            let _ = Mesh::build(raw, Some(UvProjection::Planar), "corpus.obj");
+            let _ = TriangleMesh::build(raw, Some(UvProjection::Planar), "corpus.obj");
         }
     }
 }

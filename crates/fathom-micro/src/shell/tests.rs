@@ -142,7 +142,7 @@ fn folded_prisms_are_skipped_and_counted() {
         ]),
         corner_uvs: Some(vec![[DVec2::ZERO, DVec2::Y, DVec2::X]; 2]),
     };
-    let (m, _) = mesh::Mesh::build(raw, None, "crease").unwrap();
+    let (m, _) = mesh::TriangleMesh::build(raw, None, "crease").unwrap();
     let ok = Shell::build(&m, 0.01, &tiling()).unwrap();
     assert_eq!(ok.report.skipped_inverted, 0);
     let folded = Shell::build(&m, 1.1, &tiling()).unwrap();

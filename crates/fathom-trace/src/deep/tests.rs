@@ -6,6 +6,7 @@ use super::*;
 use crate::render::{Hooks, Options, render_tape};
 use fathom_core::camera_path::{CameraPath, path_preset};
 use fathom_core::{Scene, presets, scenes};
+use fathom_image::compare::silhouette_iou;
 use glam::DVec3;
 
 const W: u32 = 48;

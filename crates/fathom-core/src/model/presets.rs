@@ -17,47 +17,47 @@ pub static PRESETS: &[Preset] = &[
     Preset {
         name: "mandelbulb",
         description: "The power-8 Mandelbulb, whole bulb in view",
-        text: include_str!("../presets/mandelbulb.ron"),
+        text: include_str!("../../presets/mandelbulb.ron"),
     },
     Preset {
         name: "menger",
         description: "The Menger sponge, level 5, seen from a corner",
-        text: include_str!("../presets/menger.ron"),
+        text: include_str!("../../presets/menger.ron"),
     },
     Preset {
         name: "sierpinski",
         description: "The Sierpinski tetrahedron, 10 levels",
-        text: include_str!("../presets/sierpinski.ron"),
+        text: include_str!("../../presets/sierpinski.ron"),
     },
     Preset {
         name: "koch",
         description: "The Koch snowflake as a wire, each generation slightly twisted",
-        text: include_str!("../presets/koch.ron"),
+        text: include_str!("../../presets/koch.ron"),
     },
     Preset {
         name: "mandelbox",
         description: "The scale-2 Mandelbox from outside a corner",
-        text: include_str!("../presets/mandelbox.ron"),
+        text: include_str!("../../presets/mandelbox.ron"),
     },
     Preset {
         name: "kifs-octahedron",
         description: "Kaleidoscopic IFS with octahedral symmetry and a twist per level",
-        text: include_str!("../presets/kifs-octahedron.ron"),
+        text: include_str!("../../presets/kifs-octahedron.ron"),
     },
     Preset {
         name: "kifs-icosahedron",
         description: "Kaleidoscopic IFS with icosahedral symmetry",
-        text: include_str!("../presets/kifs-icosahedron.ron"),
+        text: include_str!("../../presets/kifs-icosahedron.ron"),
     },
     Preset {
         name: "model-tree",
         description: "A CSG model tree: rounded cube, sphere, carved cross, torus, box frame (the seed paper's Fig. 2)",
-        text: include_str!("../presets/model-tree.ron"),
+        text: include_str!("../../presets/model-tree.ron"),
     },
     Preset {
         name: "psychedelic-tile",
         description: "A colourful CSG tile folded by an IFS loop of folds, rotations and scalings (Fig. 5)",
-        text: include_str!("../presets/psychedelic-tile.ron"),
+        text: include_str!("../../presets/psychedelic-tile.ron"),
     },
 ];
 

@@ -19,7 +19,12 @@ use std::path::{Path, PathBuf};
 pub enum OutputError {
     /// Encoding or writing the image failed (disk full, ...).
     #[error("cannot write {}: {message}", path.display())]
-    Write { path: PathBuf, message: String },
+    Write {
+        /// The file being written.
+        path: PathBuf,
+        /// What the encoder or the file system said.
+        message: String,
+    },
     /// The temporary file could not be created, or not renamed into place (the old file,
     /// if any, is unchanged).
     #[error(transparent)]
@@ -214,11 +219,25 @@ pub enum ImageKindError {
         "{path}: cannot write images with extension `{ext}`; choose .png (8 or 16 bits, \
          tonemapped) or .exr (layers: linear colour, mask, depth, normal, material id)"
     )]
-    Extension { path: String, ext: String },
+    /// The extension names no image format we write.
+    Extension {
+        /// The output path.
+        path: String,
+        /// Its extension, lower case.
+        ext: String,
+    },
+    /// The bit depth is neither 8 nor 16.
     #[error("--bit-depth {bits} is not one of 8, 16")]
-    BitDepth { bits: u8 },
+    BitDepth {
+        /// The requested bit depth.
+        bits: u8,
+    },
+    /// 16 bits were asked of an EXR, which is always 32-bit float.
     #[error("{path}: --bit-depth 16 applies to PNG; an .exr output is always 32-bit float")]
-    ExrDepth { path: String },
+    ExrDepth {
+        /// The output path.
+        path: String,
+    },
 }
 
 impl ImageKind {

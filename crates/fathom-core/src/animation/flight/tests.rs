@@ -317,7 +317,7 @@ fn bad_paths_and_bindings_are_located_errors() {
 
 #[test]
 fn the_example_dive_parses_and_stays_outside_the_bulb() {
-    let text = include_str!("../../../../docs/examples/mandelbulb-dive.ron");
+    let text = include_str!("../../../../../docs/examples/mandelbulb-dive.ron");
     let scene = scene_file::parse(text, "mandelbulb-dive.ron").unwrap();
     let tape = Tape::compile(&scene).unwrap();
     let f = scene

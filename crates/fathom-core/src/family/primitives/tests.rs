@@ -529,44 +529,6 @@ fn degenerate_parameters_give_finite_lipschitz_fields() {
     }
 }
 
-/// Rough cost of each primitive on both paths, as JSON lines (`cargo test -p fathom-core
-/// --release bench_primitives -- --ignored --nocapture`). Measures only; asserts nothing.
-#[test]
-#[ignore]
-fn bench_primitives() {
-    use std::hint::black_box;
-    use std::time::Instant;
-    let mut rng = Rng::new(1);
-    let pts: Vec<[f64; 3]> = (0..4096).map(|_| rng.cube(2.0)).collect();
-    let packets: Vec<_> = pts
-        .chunks_exact(8)
-        .map(|c| pack(&std::array::from_fn(|i| c[i])))
-        .collect();
-    for &k in Primitive::ALL {
-        let def = k.def();
-        let a = baked(def, &def.defaults());
-        let reps = 200;
-        let t = Instant::now();
-        for _ in 0..reps {
-            for p in &pts {
-                black_box(k.distance::<f64>(v3(*black_box(p)), &a));
-            }
-        }
-        let f64_ns = t.elapsed().as_nanos() as f64 / (reps * pts.len()) as f64;
-        let t = Instant::now();
-        for _ in 0..reps {
-            for p in &packets {
-                black_box(k.distance::<F32x8>(*black_box(p), &a));
-            }
-        }
-        let x8_ns = t.elapsed().as_nanos() as f64 / (reps * pts.len()) as f64;
-        println!(
-            "{{\"primitive\": \"{}\", \"f64_ns_per_point\": {f64_ns:.2}, \"f32x8_ns_per_point\": {x8_ns:.2}}}",
-            def.name
-        );
-    }
-}
-
 /// Parameters drawn over a wide box (sizes in [0, 2], signed values in [-2, 2], angles over
 /// their whole range), unrelated to the defaults: every field stays finite and 1-Lipschitz,
 /// including the odd configurations (a carving sphere that misses, one sphere inside another).
