@@ -370,10 +370,10 @@ fn the_path_tracer_accumulates_while_the_view_is_still_and_moving_shows_the_prev
         assert!(start.elapsed() < SETTLE, "notes: {:?}", h.state().notes());
         h.step();
         std::thread::sleep(Duration::from_millis(5));
-        if let Some(p) = h.state().viewport.shown.as_ref().and_then(|s| s.stats.path) {
-            if seen.last() != Some(&p.samples_per_pixel) {
-                seen.push(p.samples_per_pixel);
-            }
+        if let Some(p) = h.state().viewport.shown.as_ref().and_then(|s| s.stats.path)
+            && seen.last() != Some(&p.samples_per_pixel)
+        {
+            seen.push(p.samples_per_pixel);
         }
     }
     assert!(

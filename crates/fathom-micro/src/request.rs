@@ -81,10 +81,10 @@ pub enum Prepared {
         options: RenderOptions,
         mesh_report: MeshReport,
         /// The texture's keyframe scene at the requested time (the GPU path uploads its tape).
-        texture_scene: Option<Scene>,
+        texture_scene: Option<Box<Scene>>,
     },
     Alone {
-        texture: Texture,
+        texture: Box<Texture>,
         cell: Cell,
         lighting: Lighting,
         options: RenderOptions,
@@ -210,7 +210,7 @@ impl Request {
             };
             options.validate()?;
             return Ok(Prepared::Alone {
-                texture,
+                texture: Box::new(texture),
                 cell,
                 lighting,
                 options,
@@ -261,7 +261,7 @@ impl Request {
             scene: Box::new(MicroScene::new(shell, texture, lighting, base)),
             options,
             mesh_report,
-            texture_scene: is_exact.then_some(scene),
+            texture_scene: is_exact.then(|| Box::new(scene)),
         })
     }
 }
