@@ -30,6 +30,9 @@ enum BenchKind {
     /// Streaming mesher: triangles/s, peak RSS and surface error for Menger and Mandelbulb,
     /// sphere Hausdorff, and Mandelbulber2's mesh export where installed.
     Mesh(crate::bench_mesh::MeshBenchArgs),
+    /// `fathom mesh --max-triangles`: triangles and STL bytes before and after simplification,
+    /// the Hausdorff distance between the meshes, and the triangle estimate against the count.
+    Simplify(crate::bench_simplify::SimplifyBenchArgs),
     /// The sparse voxel octree explorer's evaluation: writes a markdown report with plots.
     Svo(crate::bench_svo::SvoArgs),
     /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
@@ -52,6 +55,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         BenchKind::Live(l) => crate::bench_live::run(l),
         BenchKind::Micro(m) => crate::bench_micro::run(m),
         BenchKind::Mesh(m) => crate::bench_mesh::run(m),
+        BenchKind::Simplify(s) => crate::bench_simplify::run(s),
         BenchKind::Svo(s) => crate::bench_svo::run(s),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
         BenchKind::Volume(v) => crate::bench_volume::run(v),
