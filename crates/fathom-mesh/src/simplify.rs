@@ -31,10 +31,13 @@ pub struct Simplified {
     pub edges: EdgeReport,
 }
 
-/// Simplifies `m` to at most `max_triangles` triangles (a mesh already within the budget is
-/// returned as it is). Fails if `max_triangles` is below 4 (a closed surface needs four) or if
-/// the input was a closed manifold and the result is not.
-pub fn simplify(m: &Mesh, max_triangles: u64) -> Result<Simplified, MeshError> {
+/// Simplifies `m` to at most `max_triangles` triangles, moving the surface by at most
+/// `max_error` (world units; meshoptimizer's quadric bound) so that collapses which would pinch
+/// thin parts into sheets (and break the manifold) are not taken. A mesh already within the
+/// budget is returned as it is. Fails if `max_triangles` is below 4 (a closed surface needs
+/// four), if the budget cannot be met within the error, or if the input was a closed manifold
+/// and the result is not.
+pub fn simplify(m: &Mesh, max_triangles: u64, max_error: f64) -> Result<Simplified, MeshError> {
     if max_triangles < MIN_TRIANGLES {
         return Err(MeshError::Simplify(format!(
             "--max-triangles {max_triangles} is out of range [{MIN_TRIANGLES}, {}]",
@@ -54,17 +57,23 @@ pub fn simplify(m: &Mesh, max_triangles: u64) -> Result<Simplified, MeshError> {
     let closed_before = check::edges(&m.tris).is_closed_manifold();
     let positions: Vec<[f32; 3]> = m.verts.iter().map(|v| v.p).collect();
     let indices: Vec<u32> = m.tris.iter().flatten().copied().collect();
-    let mut rel_error = 0.0f32;
-    // Any error is allowed (1 = the mesh's extent): the budget is the only stop.
+    let mut abs_error = 0.0f32;
     let out = meshopt::simplify_decoder(
         &indices,
         &positions,
         (max_triangles * 3) as usize,
-        1.0,
-        meshopt::SimplifyOptions::None,
-        Some(&mut rel_error),
+        max_error as f32,
+        meshopt::SimplifyOptions::ErrorAbsolute,
+        Some(&mut abs_error),
     );
-    let scale = meshopt::simplify_scale_decoder(&positions);
+    if (out.len() / 3) as u64 > max_triangles {
+        return Err(MeshError::Simplify(format!(
+            "simplifying within an error of {max_error:.3e} (--max-error) leaves {} \
+             triangles, more than --max-triangles {max_triangles}; raise either, or lower \
+             --resolution",
+            out.len() / 3
+        )));
+    }
     // Keep the vertices the triangles use, in their order.
     let mut remap = vec![u32::MAX; m.verts.len()];
     let mut verts: Vec<Vertex> = Vec::new();
@@ -81,6 +90,7 @@ pub fn simplify(m: &Mesh, max_triangles: u64) -> Result<Simplified, MeshError> {
             })
         })
         .collect();
+    let tris = drop_back_to_back(tris);
     let edges = check::edges(&tris);
     if closed_before && !edges.is_closed_manifold() {
         return Err(MeshError::Simplify(format!(
@@ -93,10 +103,45 @@ pub fn simplify(m: &Mesh, max_triangles: u64) -> Result<Simplified, MeshError> {
     Ok(Simplified {
         triangles_before: before,
         triangles_after: tris.len() as u64,
-        error: (rel_error * scale) as f64,
+        error: abs_error as f64,
         mesh: Mesh { verts, tris },
         edges,
     })
+}
+
+/// Removes pairs of triangles over the same three vertices facing opposite ways: where
+/// collapses flatten a thin wall, its two sides end up back to back, and their shared edges
+/// then belong to four triangles. Dropping both keeps every edge's count even and its
+/// directions balanced, so a closed surface stays closed.
+fn drop_back_to_back(tris: Vec<[u32; 3]>) -> Vec<[u32; 3]> {
+    use std::collections::HashMap;
+    // Canonical rotation (smallest id first) and whether the winding is the reversed one.
+    let key = |t: [u32; 3]| {
+        let r = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
+        let c = [t[r], t[(r + 1) % 3], t[(r + 2) % 3]];
+        if c[1] < c[2] {
+            ([c[0], c[1], c[2]], false)
+        } else {
+            ([c[0], c[2], c[1]], true)
+        }
+    };
+    let mut open: HashMap<[u32; 3], Vec<(usize, bool)>> = HashMap::new();
+    let mut keep = vec![true; tris.len()];
+    for (i, &t) in tris.iter().enumerate() {
+        let (k, rev) = key(t);
+        let list = open.entry(k).or_default();
+        if let Some(j) = list.iter().position(|&(_, r)| r != rev) {
+            let (other, _) = list.swap_remove(j);
+            keep[other] = false;
+            keep[i] = false;
+        } else {
+            list.push((i, rev));
+        }
+    }
+    tris.into_iter()
+        .zip(keep)
+        .filter_map(|(t, k)| k.then_some(t))
+        .collect()
 }
 
 /// Fewest triangles `--max-triangles` accepts: a closed surface needs four.
@@ -246,25 +291,52 @@ mod tests {
     }
 
     #[test]
-    fn simplification_meets_the_budget_keeps_the_surface_closed_and_stays_close() {
+    fn simplification_meets_the_budget_or_refuses_and_never_opens_a_closed_surface() {
         let (m, ..) = menger(54, Method::MarchingCubes);
         assert!(check::edges(&m.tris).is_closed_manifold());
-        let budget = m.tris.len() as u64 / 8;
-        let s = simplify(&m, budget).unwrap();
-        assert!(s.triangles_after <= budget, "{}", s.triangles_after);
-        assert!(s.triangles_after > budget / 2, "{}", s.triangles_after);
-        assert!(s.edges.is_closed_manifold(), "{:?}", s.edges);
-        let used = s.mesh.tris.iter().flatten().max().copied().unwrap() as usize;
-        assert_eq!(used + 1, s.mesh.verts.len(), "unused vertices dropped");
-        // The sponge is flat faces: an eighth of the triangles moves it by under two voxels.
         let voxel = 2.0 * 1.05 / 54.0;
-        let h = hausdorff(&m, &s.mesh);
-        assert!(h < 2.0 * voxel, "Hausdorff {h} vs voxel {voxel}");
-        assert!(hausdorff(&m, &m) < 1e-9);
+        for (budget, error) in [
+            (m.tris.len() as u64 / 2, 0.5 * voxel),
+            (m.tris.len() as u64 / 8, 4.0 * voxel),
+        ] {
+            match simplify(&m, budget, error) {
+                Ok(s) => {
+                    assert!(s.triangles_after <= budget, "{}", s.triangles_after);
+                    assert!(s.edges.is_closed_manifold(), "{:?}", s.edges);
+                    let used = s.mesh.tris.iter().flatten().max().copied().unwrap() as usize;
+                    assert_eq!(used + 1, s.mesh.verts.len(), "unused vertices dropped");
+                    let h = hausdorff(&m, &s.mesh);
+                    assert!(h < error + 2.0 * voxel, "Hausdorff {h} vs voxel {voxel}");
+                }
+                Err(e) => {
+                    let e = e.to_string();
+                    assert!(
+                        e.contains("broke the closed surface") || e.contains("--max-error"),
+                        "{e}"
+                    );
+                }
+            }
+        }
+        assert!(hausdorff(&m, &m) < 1e-6, "{}", hausdorff(&m, &m));
         // Within budget: unchanged.
-        let same = simplify(&m, m.tris.len() as u64).unwrap();
+        let same = simplify(&m, m.tris.len() as u64, voxel).unwrap();
         assert_eq!(same.mesh, m);
-        assert!(simplify(&m, 3).unwrap_err().to_string().contains("[4, "));
+        assert!(
+            simplify(&m, 3, voxel)
+                .unwrap_err()
+                .to_string()
+                .contains("[4, ")
+        );
+        // Too tight an error for the budget: refused, not exceeded.
+        let e = simplify(&m, 100, 1e-9).unwrap_err().to_string();
+        assert!(e.contains("--max-error"), "{e}");
+    }
+
+    #[test]
+    fn back_to_back_pairs_are_dropped_and_nothing_else() {
+        let t = vec![[0, 1, 2], [2, 1, 0], [1, 2, 3], [3, 1, 2], [4, 5, 6]];
+        // [3, 1, 2] is [1, 2, 3] rotated (same winding): kept, like [4, 5, 6].
+        assert_eq!(drop_back_to_back(t), vec![[1, 2, 3], [3, 1, 2], [4, 5, 6]]);
     }
 
     #[test]

@@ -23,6 +23,9 @@ pub struct SimplifyBenchArgs {
     /// Triangle budget.
     #[arg(long, default_value_t = 1_000_000)]
     max_triangles: u64,
+    /// Largest surface movement, in voxels.
+    #[arg(long, default_value_t = 0.5)]
+    max_error: f64,
     /// Vertex placement: dc, sn or mc.
     #[arg(long, value_enum, default_value = "dc")]
     method: crate::cmd_mesh::MethodArg,
@@ -46,7 +49,8 @@ pub fn run(a: SimplifyBenchArgs) -> Result<(), String> {
     fathom_mesh::mesh(&scene, &tape, &plan, &o, &mut m, &|_, _| {}).map_err(|e| e.to_string())?;
     let mesh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let s = simplify::simplify(&m, a.max_triangles).map_err(|e| e.to_string())?;
+    let s = simplify::simplify(&m, a.max_triangles, a.max_error * plan.grid.h)
+        .map_err(|e| e.to_string())?;
     let simplify_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let h = simplify::hausdorff(&m, &s.mesh);
