@@ -36,7 +36,7 @@ pub enum MethodArg {
 /// --max-triangles simplifies it (meshoptimizer; a result that is no longer closed is refused).
 ///
 /// Examples:
-///   fathom mesh --preset menger -o menger.stl --resolution 256
+///   fathom mesh --preset menger -o menger.stl --resolution 192
 ///   fathom mesh --preset mandelbulb -o bulb.ply --resolution 1024 --max-memory 2G --yes   (a large mesh on purpose)
 ///   fathom mesh my.ron -o my.glb --bounds -1,-1,-1,1,1,1 --method mc
 ///   fathom mesh FILE.fract -o imported.obj --resolution 256
@@ -251,7 +251,7 @@ fn mesh_one(
     }
     if kept > LARGE_TRIANGLES && !a.yes {
         return Err(format!(
-            "{}: the mesh would have about {} triangles (about {}), more than the {}              that slicers and viewers open comfortably; add --max-triangles N to simplify it              (e.g. --max-triangles 1000000), lower --resolution, or pass --yes to write it              anyway",
+            "{}: the mesh would have about {} triangles (about {}), more than the {} that slicers and viewers open comfortably; add --max-triangles N to simplify it (e.g. --max-triangles 1000000; see docs/files.md for its limits), lower --resolution, or pass --yes to write it anyway",
             out.display(),
             kept,
             human_bytes(size),
@@ -275,7 +275,7 @@ fn mesh_one(
         let need = plan.estimate.total() + simplify::simplify_memory(est.triangles);
         if need > a.max_memory {
             return Err(format!(
-                "simplifying holds the whole mesh in memory: about {} for {} triangles, more                  than --max-memory {} (lower --resolution or raise --max-memory)",
+                "simplifying holds the whole mesh in memory: about {} for {} triangles, more than --max-memory {} (lower --resolution or raise --max-memory)",
                 human_bytes(need),
                 est.triangles,
                 human_bytes(a.max_memory)

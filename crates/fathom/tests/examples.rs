@@ -220,8 +220,8 @@ const CASES: &[Case] = &[
         &[Image("layers.exr", 96, 64)],
     ),
     check(
-        "fathom mesh --preset menger -o menger.stl --resolution 256",
-        &[("--resolution 256", "--resolution 32")],
+        "fathom mesh --preset menger -o menger.stl --resolution 192",
+        &[("--resolution 192", "--resolution 32")],
         &[],
         &[Mesh("menger.stl"), Says("estimate: about")],
     ),
