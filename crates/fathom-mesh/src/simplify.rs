@@ -38,6 +38,17 @@ pub struct Simplified {
 /// four), if the budget cannot be met within the error, or if the input was a closed manifold
 /// and the result is not.
 pub fn simplify(m: &Mesh, max_triangles: u64, max_error: f64) -> Result<Simplified, MeshError> {
+    simplify_checked(m, max_triangles, max_error, true)
+}
+
+/// As [`simplify`]; with `keep_closed` false a result that opened the surface is returned
+/// (for measuring what the simplifier does; `fathom bench simplify --allow-open`).
+pub fn simplify_checked(
+    m: &Mesh,
+    max_triangles: u64,
+    max_error: f64,
+    keep_closed: bool,
+) -> Result<Simplified, MeshError> {
     if max_triangles < MIN_TRIANGLES {
         return Err(MeshError::Simplify(format!(
             "--max-triangles {max_triangles} is out of range [{MIN_TRIANGLES}, {}]",
@@ -92,7 +103,7 @@ pub fn simplify(m: &Mesh, max_triangles: u64, max_error: f64) -> Result<Simplifi
         .collect();
     let tris = drop_back_to_back(tris);
     let edges = check::edges(&tris);
-    if closed_before && !edges.is_closed_manifold() {
+    if keep_closed && closed_before && !edges.is_closed_manifold() {
         return Err(MeshError::Simplify(format!(
             "simplifying to {max_triangles} triangles broke the closed surface ({} boundary, \
              {} non-manifold, {} misoriented edges, {} degenerate triangles); raise \

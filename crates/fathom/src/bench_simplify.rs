@@ -26,6 +26,10 @@ pub struct SimplifyBenchArgs {
     /// Largest surface movement, in voxels.
     #[arg(long, default_value_t = 0.5)]
     max_error: f64,
+    /// Report a simplification that opened the surface instead of failing (its edge counts
+    /// are in the JSON).
+    #[arg(long)]
+    allow_open: bool,
     /// Vertex placement: dc, sn or mc.
     #[arg(long, value_enum, default_value = "dc")]
     method: crate::cmd_mesh::MethodArg,
@@ -49,8 +53,13 @@ pub fn run(a: SimplifyBenchArgs) -> Result<(), String> {
     fathom_mesh::mesh(&scene, &tape, &plan, &o, &mut m, &|_, _| {}).map_err(|e| e.to_string())?;
     let mesh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let s = simplify::simplify(&m, a.max_triangles, a.max_error * plan.grid.h)
-        .map_err(|e| e.to_string())?;
+    let s = simplify::simplify_checked(
+        &m,
+        a.max_triangles,
+        a.max_error * plan.grid.h,
+        !a.allow_open,
+    )
+    .map_err(|e| e.to_string())?;
     let simplify_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let h = simplify::hausdorff(&m, &s.mesh);
@@ -82,6 +91,8 @@ pub fn run(a: SimplifyBenchArgs) -> Result<(), String> {
             "vertices": s.mesh.verts.len(),
             "stl_bytes": stl(s.triangles_after),
             "closed_manifold": s.edges.is_closed_manifold(),
+            "boundary_edges": s.edges.boundary,
+            "non_manifold_edges": s.edges.non_manifold,
             "simplify_seconds": simplify_s,
         },
         "hausdorff": h,
