@@ -10,7 +10,9 @@
 //!   vertices and triangles to a [`MeshSink`] as soon as they are final;
 //! - [`write`]: PLY, STL, OBJ and GLB sinks;
 //! - [`check`]: closed-manifold checks and Hausdorff distances, for tests and benchmarks;
-//! - [`fit`]: bounds fitted to a scene.
+//! - [`fit`]: bounds fitted to a scene;
+//! - [`simplify`]: simplification to a triangle budget (meshoptimizer), the triangle-count
+//!   and file-size estimates made before meshing, and mesh-to-mesh Hausdorff distances.
 //!
 //! What is guaranteed (and tested): the corner signs define the surface; each cube face's
 //! contour depends on that face's corners only, so neighbouring cells agree and every mesh is
@@ -28,6 +30,7 @@ pub mod check;
 pub mod cull;
 pub mod fit;
 pub mod grid;
+pub mod simplify;
 pub mod stream;
 pub mod table;
 pub mod write;
@@ -97,6 +100,8 @@ pub enum IsoMeshError {
     },
     #[error("{path}: {msg}")]
     Format { path: String, msg: String },
+    #[error("{0}")]
+    Simplify(String),
     #[error("invalid scene: {0}")]
     Scene(String),
     /// The output could not be created or put in place (an existing file is unchanged).

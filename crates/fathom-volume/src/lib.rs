@@ -10,11 +10,13 @@
 //!   Henyey-Greenstein; [`light`]: environment, sun, emission;
 //! - [`integrator`]: one camera path (next-event estimation with MIS, Russian roulette);
 //!   [`render`]: progressive, deterministic images over rayon;
-//! - [`physarum`]: the agent simulation that grows a network in a trail grid.
+//! - [`physarum`]: the agent simulation that grows a network in a trail grid;
+//! - [`exposure`]: the extinction scale and the box to frame, from a grid's statistics.
 //!
 //! See `docs/volume.md` for the design and the measurements.
 
 pub mod error;
+pub mod exposure;
 mod file_io;
 pub mod fractal;
 pub mod grid;

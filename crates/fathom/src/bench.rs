@@ -33,6 +33,9 @@ enum BenchKind {
     /// Path tracer: paths/s per preset at 640x480, time to 2 % RMSE against a high-spp
     /// reference (raw and denoised), and one explorer accumulation pass at 1280x720.
     Pathtrace(crate::bench_pathtrace::PathTraceBenchArgs),
+    /// `fathom mesh --max-triangles`: triangles and STL bytes before and after simplification,
+    /// the Hausdorff distance between the meshes, and the triangle estimate against the count.
+    Simplify(crate::bench_simplify::SimplifyBenchArgs),
     /// The sparse voxel octree explorer's evaluation: writes a markdown report with plots.
     Svo(crate::bench_svo::SvoArgs),
     /// Renders every preset with basic, enhanced and enhanced+prepass tracing: wall ms, rays/s,
@@ -56,6 +59,7 @@ pub fn run(a: BenchArgs) -> Result<(), String> {
         BenchKind::Micro(m) => crate::bench_micro::run(m),
         BenchKind::Mesh(m) => crate::bench_mesh::run(m),
         BenchKind::Pathtrace(p) => crate::bench_pathtrace::run(p),
+        BenchKind::Simplify(s) => crate::bench_simplify::run(s),
         BenchKind::Svo(s) => crate::bench_svo::run(s),
         BenchKind::Trace(t) => crate::bench_trace::run(t),
         BenchKind::Volume(v) => crate::bench_volume::run(v),

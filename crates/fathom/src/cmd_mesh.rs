@@ -5,7 +5,7 @@ use clap::{Args, ValueEnum};
 use fathom_core::scene::Scene;
 use fathom_core::{Tape, presets, scene_file};
 use fathom_mesh::grid::{human_bytes, parse_bytes};
-use fathom_mesh::{MeshOptions, Method, write};
+use fathom_mesh::{Mesh, MeshOptions, MeshStats, Method, Window, simplify, write};
 use fathom_trace::output;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -30,9 +30,14 @@ pub enum MethodArg {
 /// format follows the output's extension: .ply (binary, vertex colours), .stl (binary), .obj
 /// (vertex colours), .glb (glTF 2.0, vertex colours).
 ///
+/// Before meshing, the triangle count is estimated from two coarse meshes and printed with the
+/// file size it means; a mesh of more than 10 million triangles (about 500 MB as STL, more
+/// than slicers and viewers open comfortably) is refused unless --yes is given or
+/// --max-triangles simplifies it (meshoptimizer; a result that is no longer closed is refused).
+///
 /// Examples:
-///   fathom mesh --preset menger -o menger.stl --resolution 512
-///   fathom mesh --preset mandelbulb -o bulb.ply --resolution 1024 --max-memory 2G
+///   fathom mesh --preset menger -o menger.stl --resolution 192
+///   fathom mesh --preset mandelbulb -o bulb.ply --resolution 1024 --max-memory 2G --yes   (a large mesh on purpose)
 ///   fathom mesh my.ron -o my.glb --bounds -1,-1,-1,1,1,1 --method mc
 ///   fathom mesh FILE.fract -o imported.obj --resolution 256
 ///   fathom mesh docs/examples/mandelbulb-dive.ron --path dive --frames 48 -o dive-meshes/
@@ -80,7 +85,21 @@ pub struct MeshArgs {
     /// Meshes in the sequence, [1, 100000]; the first at the path's start, the last at its end.
     #[arg(long, requires = "path")]
     pub frames: Option<usize>,
+    /// Simplify to at most this many triangles, [4, 1431655765] (meshoptimizer's edge
+    /// collapses; the mesh is held in memory for it, and a closed surface stays closed).
+    #[arg(long)]
+    pub max_triangles: Option<u64>,
+    /// With --max-triangles: how far simplification may move the surface, in voxels (0, 64]:
+    /// collapses past it (which pinch thin parts into sheets) are not taken.
+    #[arg(long, default_value_t = 0.5)]
+    pub max_error: f64,
+    /// Write meshes of more than 10 million triangles (the estimate is printed first).
+    #[arg(long, short)]
+    pub yes: bool,
 }
+
+/// Triangles past which a mesh needs --yes (or --max-triangles): about 500 MB as binary STL.
+pub const LARGE_TRIANGLES: u64 = 10_000_000;
 
 /// Most meshes in one `--path` sequence.
 pub const MAX_MESH_FRAMES: usize = 100_000;
@@ -199,6 +218,70 @@ fn mesh_one(
         .install(|| fathom_mesh::plan(scene, &tape, &o))
         .map_err(|e| e.to_string())?;
     let g = plan.grid;
+    let format = write::Format::of(out).map_err(|e| e.to_string())?;
+    let est = pool
+        .install(|| fathom_mesh::simplify::estimate_triangles(scene, &tape, &o))
+        .map_err(|e| e.to_string())?;
+    let kept = a
+        .max_triangles
+        .map_or(est.triangles, |m| m.min(est.triangles));
+    let size = simplify::file_size(format, kept, !a.no_colours);
+    if !a.quiet {
+        let how = if est.samples[0] == est.samples[1] {
+            "counted".to_string()
+        } else {
+            format!(
+                "from {} and {} triangles at resolutions {} and {}: growth r^{:.2}",
+                est.samples[0].1,
+                est.samples[1].1,
+                est.samples[0].0,
+                est.samples[1].0,
+                est.exponent
+            )
+        };
+        eprintln!(
+            "estimate: about {} triangles ({how}); {} written: about {}",
+            est.triangles,
+            match a.max_triangles {
+                Some(m) if m < est.triangles => format!("simplified to {m}"),
+                _ => "as meshed".into(),
+            },
+            human_bytes(size)
+        );
+    }
+    if kept > LARGE_TRIANGLES && !a.yes {
+        return Err(format!(
+            "{}: the mesh would have about {} triangles (about {}), more than the {} that slicers and viewers open comfortably; add --max-triangles N to simplify it (e.g. --max-triangles 1000000; see docs/files.md for its limits), lower --resolution, or pass --yes to write it anyway",
+            out.display(),
+            kept,
+            human_bytes(size),
+            LARGE_TRIANGLES
+        ));
+    }
+    if !(a.max_error > 0.0 && a.max_error <= 64.0) {
+        return Err(format!(
+            "--max-error {} is out of range (0, 64] voxels",
+            a.max_error
+        ));
+    }
+    if let Some(m) = a.max_triangles {
+        if m < simplify::MIN_TRIANGLES || m > u32::MAX as u64 / 3 {
+            return Err(format!(
+                "--max-triangles {m} is out of range [{}, {}]",
+                simplify::MIN_TRIANGLES,
+                u32::MAX / 3
+            ));
+        }
+        let need = plan.estimate.total() + simplify::simplify_memory(est.triangles);
+        if need > a.max_memory {
+            return Err(format!(
+                "simplifying holds the whole mesh in memory: about {} for {} triangles, more than --max-memory {} (lower --resolution or raise --max-memory)",
+                human_bytes(need),
+                est.triangles,
+                human_bytes(a.max_memory)
+            ));
+        }
+    }
     if !a.quiet {
         eprintln!(
             "meshing {}x{}x{} cells of {:.3e} over {:.3?} .. {:.3?}; memory {}",
@@ -225,9 +308,59 @@ fn mesh_one(
         b
     };
     let progress = |done: u64, _total: u64| bar.set_position(done);
-    let stats = pool
-        .install(|| fathom_mesh::mesh(scene, &tape, &plan, &o, sink.as_mut(), &progress))
-        .map_err(|e| e.to_string())?;
+    let stats = match a.max_triangles {
+        None => pool
+            .install(|| fathom_mesh::mesh(scene, &tape, &plan, &o, sink.as_mut(), &progress))
+            .map_err(|e| e.to_string())?,
+        Some(budget) => {
+            let mut whole = Mesh::default();
+            let stats = pool
+                .install(|| fathom_mesh::mesh(scene, &tape, &plan, &o, &mut whole, &progress))
+                .map_err(|e| e.to_string())?;
+            bar.finish_and_clear();
+            let spin = if a.quiet {
+                indicatif::ProgressBar::hidden()
+            } else {
+                indicatif::ProgressBar::new_spinner()
+                    .with_message(format!("simplifying {} triangles", whole.tris.len()))
+            };
+            spin.enable_steady_tick(std::time::Duration::from_millis(200));
+            let t = std::time::Instant::now();
+            let s = pool
+                .install(|| simplify::simplify(&whole, budget, a.max_error * g.h))
+                .map_err(|e| e.to_string())?;
+            spin.finish_and_clear();
+            drop(whole);
+            if !a.quiet {
+                eprintln!(
+                    "simplified {} to {} triangles in {:.1} s (meshoptimizer's error bound {:.3e}; {})",
+                    s.triangles_before,
+                    s.triangles_after,
+                    t.elapsed().as_secs_f64(),
+                    s.error,
+                    if s.edges.is_closed_manifold() {
+                        "closed and manifold"
+                    } else {
+                        "not closed: the meshed surface was not either"
+                    }
+                );
+            }
+            let m = s.mesh;
+            sink.vertices(&m.verts).map_err(|e| e.to_string())?;
+            let window = Window {
+                first: 0,
+                parts: [&m.verts[..], &[]],
+            };
+            sink.triangles(&m.tris, &window)
+                .map_err(|e| e.to_string())?;
+            sink.finish().map_err(|e| e.to_string())?;
+            MeshStats {
+                triangles: m.tris.len() as u64,
+                vertices: m.verts.len() as u64,
+                ..stats
+            }
+        }
+    };
     bar.finish_and_clear();
     if stats.missing_faces > 0 {
         eprintln!(
@@ -273,6 +406,9 @@ mod tests {
             quiet: true,
             path: None,
             frames: None,
+            max_triangles: None,
+            max_error: 0.5,
+            yes: false,
         }
     }
 
@@ -315,6 +451,68 @@ mod tests {
         bad.frames = Some(0);
         assert!(run(bad).unwrap_err().contains("--frames 0"));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn large_meshes_need_yes_or_a_budget_and_the_budget_keeps_them_closed() {
+        let dir = std::env::temp_dir().join(format!("fathom-cmd-mesh-big-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // Menger at 2048: the estimate is far past 10M triangles; refused before meshing.
+        let out = dir.join("big.stl");
+        let mut big = args(out.to_str().unwrap());
+        big.resolution = 2048;
+        let t = std::time::Instant::now();
+        let e = run(big).unwrap_err();
+        assert!(e.contains("--yes") && e.contains("--max-triangles"), "{e}");
+        assert!(!out.exists(), "a refused run leaves no file");
+        assert!(t.elapsed().as_secs_f64() < 20.0);
+        // A budget: at most that many triangles, still closed (marching cubes is manifold).
+        let out = dir.join("small.stl");
+        let mut a = args(out.to_str().unwrap());
+        a.resolution = 48;
+        a.max_triangles = Some(3000);
+        a.max_error = 2.0;
+        // Either the budget is met with a closed surface, or the run is refused and writes
+        // nothing (meshoptimizer can pinch the sponge's bars: docs/files.md).
+        match run(a) {
+            Ok(()) => {
+                let b = std::fs::read(&out).unwrap();
+                let n = u32::from_le_bytes(b[80..84].try_into().unwrap()) as usize;
+                assert!(n <= 3000, "{n} triangles");
+                let mesh = stl_triangles(&b);
+                assert!(fathom_mesh::check::edges(&mesh).is_closed_manifold());
+            }
+            Err(e) => {
+                assert!(
+                    e.contains("broke the closed surface") || e.contains("--max-error"),
+                    "{e}"
+                );
+                assert!(!out.exists(), "a refused simplification leaves no file");
+            }
+        }
+        let mut bad = args(dir.join("x.stl").to_str().unwrap());
+        bad.max_triangles = Some(2);
+        assert!(
+            run(bad)
+                .unwrap_err()
+                .contains("--max-triangles 2 is out of range [4, ")
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Welds an STL's corners back into indexed triangles (exact positions).
+    fn stl_triangles(b: &[u8]) -> Vec<[u32; 3]> {
+        let mut ids = std::collections::HashMap::new();
+        b[84..]
+            .chunks_exact(50)
+            .map(|t| {
+                std::array::from_fn(|k| {
+                    let c = &t[12 + 12 * k..24 + 12 * k];
+                    let n = ids.len() as u32;
+                    *ids.entry(c.to_vec()).or_insert(n)
+                })
+            })
+            .collect()
     }
 
     #[test]

@@ -5,6 +5,7 @@ use clap::{Args, ValueEnum};
 use fathom_core::{presets, scene_file};
 use fathom_volume::VolumeError;
 use fathom_volume::WorldBox;
+use fathom_volume::exposure;
 use fathom_volume::integrator::VolumeScene;
 use fathom_volume::light::{Environment, Sun};
 use fathom_volume::medium::{Majorant, Medium, MediumParams};
@@ -123,18 +124,21 @@ pub struct VolumeArgs {
     /// Scenes: smooth the density over this many voxels across the surface [0, 64].
     #[arg(long, default_value_t = 0.0)]
     pub smooth: f32,
-    /// Extinction per unit density and length [0, 1e6].
-    #[arg(long, default_value_t = 20.0)]
-    pub density_scale: f32,
+    /// Extinction per unit density and length [0, 1e6]. Default: automatic, from the grid's
+    /// statistics (a line crossing the structure meets about 3 optical depths on average; the
+    /// value chosen is printed and written to --stats).
+    #[arg(long)]
+    pub density_scale: Option<f32>,
     /// Single-scattering albedo: A or r,g,b in [0, 1].
     #[arg(long, default_value = "0.8")]
     pub albedo: String,
     /// Henyey-Greenstein asymmetry (-1, 1): 0 isotropic, > 0 forward.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub g: f32,
-    /// Constant environment radiance: R or r,g,b.
-    #[arg(long, default_value = "1")]
-    pub env: String,
+    /// Constant environment radiance: R or r,g,b. With none of --env, --sky-top and --sun the
+    /// default lighting is a sun from 0.4,1,0.3 and a blue sky gradient (docs/volume.md).
+    #[arg(long)]
+    pub env: Option<String>,
     /// Sky gradient instead of --env: radiance straight up, r,g,b (with --sky-bottom).
     #[arg(long, requires = "sky_bottom")]
     pub sky_top: Option<String>,
@@ -145,7 +149,7 @@ pub struct VolumeArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub sun: Option<String>,
     /// Sun radiance (as irradiance): R or r,g,b.
-    #[arg(long, default_value = "3")]
+    #[arg(long, default_value = "5")]
     pub sun_radiance: String,
     /// Emission strength of the colour map on density (0: none) [0, 1e6].
     #[arg(long, default_value_t = 0.0)]
@@ -165,7 +169,8 @@ pub struct VolumeArgs {
     /// Russian roulette after this many scattering events.
     #[arg(long, default_value_t = 5)]
     pub rr_depth: u32,
-    /// Camera position x,y,z (default: the scene's camera, or framing the grid).
+    /// Camera position x,y,z (default: the scene's camera, or framing the grid's occupied
+    /// voxels).
     #[arg(long, allow_hyphen_values = true, value_parser = crate::args::parse_vec)]
     pub eye: Option<DVec3>,
     /// Point the camera looks at x,y,z.
@@ -324,9 +329,10 @@ fn source(a: &VolumeArgs) -> Result<Source, String> {
     Ok(Source::File { path, placement })
 }
 
+/// The medium's parameters; an automatic density scale is 1 until the grid is built.
 fn medium_params(a: &VolumeArgs) -> Result<MediumParams, String> {
     Ok(MediumParams {
-        density_scale: a.density_scale,
+        density_scale: a.density_scale.unwrap_or(1.0),
         albedo: colour("albedo", &a.albedo)?,
         g: a.g,
         emission: a.emission,
@@ -340,16 +346,31 @@ fn medium_params(a: &VolumeArgs) -> Result<MediumParams, String> {
     })
 }
 
+/// Where the default sun comes from (towards it), when no lighting is given.
+pub const DEFAULT_SUN: [f32; 3] = [0.4, 1.0, 0.3];
+/// The default sky gradient: straight up, straight down.
+pub const DEFAULT_SKY: ([f32; 3], [f32; 3]) = ([0.35, 0.5, 0.9], [0.1, 0.09, 0.08]);
+
 fn lighting(a: &VolumeArgs) -> Result<(Environment, Option<Sun>), String> {
-    let env = match (&a.sky_top, &a.sky_bottom) {
-        (Some(t), Some(b)) => Environment::Sky {
+    let defaults = a.env.is_none() && a.sky_top.is_none() && a.sun.is_none();
+    let env = match (&a.sky_top, &a.sky_bottom, &a.env) {
+        (Some(t), Some(b), _) => Environment::Sky {
             top: colour("sky-top", t)?,
             bottom: colour("sky-bottom", b)?,
             up: Vec3::Y,
         },
-        _ => Environment::Constant(colour("env", &a.env)?),
+        (_, _, Some(e)) => Environment::Constant(colour("env", e)?),
+        _ => Environment::Sky {
+            top: Vec3::from(DEFAULT_SKY.0),
+            bottom: Vec3::from(DEFAULT_SKY.1),
+            up: Vec3::Y,
+        },
     };
     let sun = match &a.sun {
+        None if defaults => Some(Sun {
+            towards: Vec3::from(DEFAULT_SUN).normalize(),
+            radiance: colour("sun-radiance", &a.sun_radiance)?,
+        }),
         None => None,
         Some(s) => {
             let d = vec3("sun", s)?;
@@ -389,6 +410,9 @@ pub fn run(a: VolumeArgs) -> Result<(), String> {
     }
     let params = medium_params(&a)?;
     params.validate().map_err(|e| e.to_string())?;
+    if a.sky_top.is_some() && a.env.is_some() {
+        return Err("--env and --sky-top both set the environment: give one".into());
+    }
     let (environment, sun) = lighting(&a)?;
     let output = match (&a.output, &a.export) {
         (Some(o), _) => Some(o.clone()),
@@ -533,6 +557,7 @@ fn run_in_pool(
     (width, height): (u32, u32),
     limit: u64,
 ) -> Result<(), String> {
+    let scene_camera = matches!(src, Source::Fractal { .. });
     let pb = std::sync::Mutex::new(None::<ProgressBar>);
     let built = pipeline::build(&src, limit, &|what, done, total| {
         let mut g = pb.lock().expect("progress lock");
@@ -564,7 +589,29 @@ fn run_in_pool(
         );
     }
     if let Some(out) = &output {
-        let mut camera = built.camera.clone();
+        let mut params = params;
+        let exposure = exposure::auto(&built.density);
+        let mut camera = if scene_camera {
+            built.camera.clone()
+        } else {
+            pipeline::framing_camera(&exposure.occupied_box)
+        };
+        if a.density_scale.is_none() {
+            params.density_scale = exposure.density_scale;
+            if !a.quiet {
+                eprintln!(
+                    "volume: density scale {:.4} (automatic: {:.2}% of the voxels are structure, mean chord {:.4}, mean density {:.3}; set --density-scale to override)",
+                    exposure.density_scale,
+                    100.0 * exposure.occupied_fraction,
+                    exposure.mean_chord,
+                    exposure.mean_density
+                );
+            }
+        }
+        let mut ex = serde_json::to_value(exposure).map_err(|e| e.to_string())?;
+        ex["density_scale_used"] = params.density_scale.into();
+        ex["automatic"] = a.density_scale.is_none().into();
+        stats.insert("exposure".into(), ex);
         for (field, v) in [
             (&mut camera.eye, a.eye),
             (&mut camera.target, a.target),
@@ -809,6 +856,67 @@ mod tests {
                 .unwrap_or_else(|| panic!("{list:?} should fail"));
             assert!(e.contains(want), "{list:?}: expected `{want}` in: {e}");
         }
+    }
+
+    #[test]
+    fn the_default_lighting_and_density_scale_show_the_structure() {
+        let (png, stats) = (tmp("auto.png"), tmp("auto.json"));
+        run(args(&[
+            "--sim", "physarum", "--grid", "48", "--steps", "80", "--size", "48x48", "--spp", "8",
+            "-o", &png, "--stats", &stats, "--quiet",
+        ]))
+        .unwrap();
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let ex = &s["exposure"];
+        assert_eq!(ex["automatic"], true, "{s}");
+        let scale = ex["density_scale_used"].as_f64().unwrap();
+        let depth =
+            scale * ex["mean_chord"].as_f64().unwrap() * ex["mean_density"].as_f64().unwrap();
+        assert!((depth - 3.0).abs() < 0.01, "{ex}");
+        // Lit, not a white haze: the picture is far from one colour.
+        let img = image::open(&png).unwrap().to_luma8();
+        let v: Vec<f64> = img.pixels().map(|p| p.0[0] as f64).collect();
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt();
+        assert!(sd > 10.0, "flat picture: mean {mean}, sd {sd}");
+        // An explicit scale is used as given.
+        run(args(&[
+            "--sim",
+            "physarum",
+            "--grid",
+            "16",
+            "--steps",
+            "4",
+            "--size",
+            "8x8",
+            "--spp",
+            "1",
+            "--density-scale",
+            "7",
+            "-o",
+            &png,
+            "--stats",
+            &stats,
+            "--quiet",
+        ]))
+        .unwrap();
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(s["exposure"]["density_scale_used"], 7.0);
+        assert_eq!(s["exposure"]["automatic"], false);
+        let e = run(args(&[
+            "--env",
+            "1",
+            "--sky-top",
+            "1,1,1",
+            "--sky-bottom",
+            "0,0,0",
+            "--size",
+            "8x8",
+        ]))
+        .unwrap_err();
+        assert!(e.contains("--env and --sky-top"), "{e}");
     }
 
     #[test]

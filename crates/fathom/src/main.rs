@@ -19,6 +19,7 @@ mod bench_live;
 mod bench_mesh;
 mod bench_micro;
 mod bench_pathtrace;
+mod bench_simplify;
 mod bench_svo;
 mod bench_trace;
 mod bench_volume;
