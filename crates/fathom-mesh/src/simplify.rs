@@ -13,7 +13,7 @@
 
 use crate::check::{self, EdgeReport, TriangleIndex};
 use crate::stream::{MeshOptions, mesh, plan};
-use crate::{Mesh, MeshError, Vertex};
+use crate::{IsoMesh, IsoMeshError, Vertex};
 use fathom_core::Tape;
 use fathom_core::scene::Scene;
 use glam::{DVec3, Vec3};
@@ -21,7 +21,7 @@ use glam::{DVec3, Vec3};
 /// What a simplification did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Simplified {
-    pub mesh: Mesh,
+    pub mesh: IsoMesh,
     /// Triangles before and after.
     pub triangles_before: u64,
     pub triangles_after: u64,
@@ -37,20 +37,24 @@ pub struct Simplified {
 /// budget is returned as it is. Fails if `max_triangles` is below 4 (a closed surface needs
 /// four), if the budget cannot be met within the error, or if the input was a closed manifold
 /// and the result is not.
-pub fn simplify(m: &Mesh, max_triangles: u64, max_error: f64) -> Result<Simplified, MeshError> {
+pub fn simplify(
+    m: &IsoMesh,
+    max_triangles: u64,
+    max_error: f64,
+) -> Result<Simplified, IsoMeshError> {
     simplify_checked(m, max_triangles, max_error, true)
 }
 
 /// As [`simplify`]; with `keep_closed` false a result that opened the surface is returned
 /// (for measuring what the simplifier does; `fathom bench simplify --allow-open`).
 pub fn simplify_checked(
-    m: &Mesh,
+    m: &IsoMesh,
     max_triangles: u64,
     max_error: f64,
     keep_closed: bool,
-) -> Result<Simplified, MeshError> {
+) -> Result<Simplified, IsoMeshError> {
     if max_triangles < MIN_TRIANGLES {
-        return Err(MeshError::Simplify(format!(
+        return Err(IsoMeshError::Simplify(format!(
             "--max-triangles {max_triangles} is out of range [{MIN_TRIANGLES}, {}]",
             u32::MAX / 3
         )));
@@ -78,7 +82,7 @@ pub fn simplify_checked(
         Some(&mut abs_error),
     );
     if (out.len() / 3) as u64 > max_triangles {
-        return Err(MeshError::Simplify(format!(
+        return Err(IsoMeshError::Simplify(format!(
             "simplifying within an error of {max_error:.3e} (--max-error) leaves {} \
              triangles, more than --max-triangles {max_triangles}; raise either, or lower \
              --resolution",
@@ -104,7 +108,7 @@ pub fn simplify_checked(
     let tris = drop_back_to_back(tris);
     let edges = check::edges(&tris);
     if keep_closed && closed_before && !edges.is_closed_manifold() {
-        return Err(MeshError::Simplify(format!(
+        return Err(IsoMeshError::Simplify(format!(
             "simplifying to {max_triangles} triangles broke the closed surface ({} boundary, \
              {} non-manifold, {} misoriented edges, {} degenerate triangles); raise \
              --max-triangles",
@@ -115,7 +119,7 @@ pub fn simplify_checked(
         triangles_before: before,
         triangles_after: tris.len() as u64,
         error: abs_error as f64,
-        mesh: Mesh { verts, tris },
+        mesh: IsoMesh { verts, tris },
         edges,
     })
 }
@@ -160,17 +164,17 @@ pub const MIN_TRIANGLES: u64 = 4;
 
 /// Two-sided Hausdorff distance between two meshes, over the vertices and triangle centroids
 /// of each to the surface of the other.
-pub fn hausdorff(a: &Mesh, b: &Mesh) -> f64 {
+pub fn hausdorff(a: &IsoMesh, b: &IsoMesh) -> f64 {
     one_sided(a, b).max(one_sided(b, a))
 }
 
-fn one_sided(from: &Mesh, to: &Mesh) -> f64 {
+fn one_sided(from: &IsoMesh, to: &IsoMesh) -> f64 {
     use rayon::prelude::*;
     if from.tris.is_empty() || to.tris.is_empty() {
         return 0.0;
     }
     // Buckets about the target's mean edge length.
-    let p = |m: &Mesh, v: u32| Vec3::from(m.verts[v as usize].p).as_dvec3();
+    let p = |m: &IsoMesh, v: u32| Vec3::from(m.verts[v as usize].p).as_dvec3();
     let edge: f64 = to
         .tris
         .iter()
@@ -225,8 +229,8 @@ pub fn estimate_triangles(
     scene: &Scene,
     tape: &Tape,
     o: &MeshOptions,
-) -> Result<TriangleEstimate, MeshError> {
-    let count = |r: u32| -> Result<u64, MeshError> {
+) -> Result<TriangleEstimate, IsoMeshError> {
+    let count = |r: u32| -> Result<u64, IsoMeshError> {
         let co = MeshOptions {
             resolution: r,
             colours: false,
@@ -287,7 +291,7 @@ mod tests {
     use crate::Method;
     use fathom_core::presets;
 
-    fn menger(resolution: u32, method: Method) -> (Mesh, Scene, Tape, MeshOptions) {
+    fn menger(resolution: u32, method: Method) -> (IsoMesh, Scene, Tape, MeshOptions) {
         let scene = presets::load("menger").unwrap();
         let tape = Tape::compile(&scene).unwrap();
         let o = MeshOptions {
@@ -296,7 +300,7 @@ mod tests {
             ..MeshOptions::default()
         };
         let p = plan(&scene, &tape, &o).unwrap();
-        let mut m = Mesh::default();
+        let mut m = IsoMesh::default();
         mesh(&scene, &tape, &p, &o, &mut m, &|_, _| {}).unwrap();
         (m, scene, tape, o)
     }

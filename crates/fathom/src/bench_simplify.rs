@@ -9,7 +9,7 @@ use clap::Args;
 use fathom_core::{Tape, presets};
 use fathom_mesh::simplify::{self, file_size};
 use fathom_mesh::write::Format;
-use fathom_mesh::{Mesh, MeshOptions, check};
+use fathom_mesh::{IsoMesh, MeshOptions, check};
 use std::time::Instant;
 
 #[derive(Args)]
@@ -49,7 +49,7 @@ pub fn run(a: SimplifyBenchArgs) -> Result<(), String> {
     let estimate_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let plan = fathom_mesh::plan(&scene, &tape, &o).map_err(|e| e.to_string())?;
-    let mut m = Mesh::default();
+    let mut m = IsoMesh::default();
     fathom_mesh::mesh(&scene, &tape, &plan, &o, &mut m, &|_, _| {}).map_err(|e| e.to_string())?;
     let mesh_s = t.elapsed().as_secs_f64();
     let t = Instant::now();

@@ -5,7 +5,7 @@ use clap::{Args, ValueEnum};
 use fathom_core::scene::Scene;
 use fathom_core::{Tape, presets, scene_file};
 use fathom_mesh::grid::{human_bytes, parse_bytes};
-use fathom_mesh::{Mesh, MeshOptions, MeshStats, Method, Window, simplify, write};
+use fathom_mesh::{IsoMesh, MeshOptions, MeshStats, Method, Window, simplify, write};
 use fathom_trace::output;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -313,7 +313,7 @@ fn mesh_one(
             .install(|| fathom_mesh::mesh(scene, &tape, &plan, &o, sink.as_mut(), &progress))
             .map_err(|e| e.to_string())?,
         Some(budget) => {
-            let mut whole = Mesh::default();
+            let mut whole = IsoMesh::default();
             let stats = pool
                 .install(|| fathom_mesh::mesh(scene, &tape, &plan, &o, &mut whole, &progress))
                 .map_err(|e| e.to_string())?;
