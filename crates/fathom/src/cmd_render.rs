@@ -36,7 +36,7 @@ pub enum TracerKind {
 ///   fathom render --preset mandelbulb -o layers.exr          colour, mask, depth, normal, id
 ///   fathom render --preset mandelbulb --bit-depth 16 -o deep.png
 ///   fathom render --preset menger --integrator path --spp 256 --denoise -o lit.png
-///   fathom render --preset mandelbulb --integrator path --time 30s --aperture 0.02 -o dof.png
+///   fathom render --preset mandelbulb --integrator path --time-limit 30s --aperture 0.02 -o dof.png
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 -o dive/
 ///   fathom render docs/examples/mandelbulb-dive.ron --path dive --frames 300 \
 ///       -o shots/dive-####.exr --camera-path shots/dive.glb
@@ -142,19 +142,20 @@ pub struct RenderArgs {
     /// How light is computed: `preview`, the fast sphere tracer with Blinn-Phong shading
     /// (the default, and what --renderer chooses among), or `path`, the progressive path
     /// tracer (global illumination, soft shadows, glossy and glass materials, depth of field;
-    /// CPU only so far). `--integrator path` takes --spp or --time, --bounces, --aperture,
+    /// CPU only so far). `--integrator path` takes --spp or --time-limit, --bounces, --aperture,
     /// --focus-distance and --denoise.
     #[arg(long, value_enum, default_value = "preview")]
     pub integrator: IntegratorKind,
     /// With --integrator path: samples per pixel, [1, 1048576]; the noise falls as 1/sqrt(spp)
-    /// (64 is a clean preview, 1024 a print) [default: 64, or with --time as many as fit].
-    /// With --time, the most samples to take.
+    /// (64 is a clean preview, 1024 a print) [default: 64, or with --time-limit as many as fit].
+    /// With --time-limit, the most samples to take.
     #[arg(long)]
     pub spp: Option<u32>,
     /// With --integrator path: take samples for this long instead of a count, e.g. 30s, 2m,
     /// 1.5 (seconds); at least one sample per pixel is always taken.
+    /// (Named apart from `fathom farm slurm --time`, Slurm's own wall-time limit.)
     #[arg(long, value_parser = parse_duration)]
-    pub time: Option<f64>,
+    pub time_limit: Option<f64>,
     /// With --integrator path: surface and fog interactions per path, [1, 256] (glass and
     /// deep crevices need more).
     #[arg(long, default_value_t = 8)]
@@ -353,7 +354,7 @@ impl RenderArgs {
         }
         for (given, flag) in [
             (self.spp.is_some(), "--spp"),
-            (self.time.is_some(), "--time"),
+            (self.time_limit.is_some(), "--time-limit"),
             (self.denoise.is_some(), "--denoise"),
             (self.aperture != 0.0, "--aperture"),
             (self.focus_distance.is_some(), "--focus-distance"),
@@ -396,12 +397,12 @@ impl RenderArgs {
             backend,
             threads: self.threads,
             path: PathRequest {
-                spp: match (self.spp, self.time) {
+                spp: match (self.spp, self.time_limit) {
                     (Some(n), _) => n,
                     (None, Some(_)) => fathom_render::request::MAX_PATH_SPP,
                     (None, None) => DEFAULT_SPP,
                 },
-                time_limit: self.time,
+                time_limit: self.time_limit,
                 max_bounces: self.bounces,
                 aperture: self.aperture,
                 focus_distance: self.focus_distance,
@@ -892,7 +893,7 @@ mod tests {
         };
         for flag in [
             &["--spp", "4"][..],
-            &["--time", "3s"],
+            &["--time-limit", "3s"],
             &["--denoise"],
             &["--aperture", "0.1"],
         ] {
@@ -924,8 +925,8 @@ mod tests {
             .request()
             .unwrap_err();
         assert!(e.contains("stereo"), "{e}");
-        // --time alone means as many samples as fit.
-        let r = parse(&["--integrator", "path", "--time", "2m"])
+        // --time-limit alone means as many samples as fit.
+        let r = parse(&["--integrator", "path", "--time-limit", "2m"])
             .unwrap()
             .request()
             .unwrap();

@@ -371,8 +371,8 @@ const CASES: &[Case] = &[
         &[Image("lit.png", 96, 64)],
     ),
     check(
-        "fathom render --preset mandelbulb --integrator path --time 30s --aperture 0.02 -o dof.png",
-        &[("--time 30s", "--time 1s")],
+        "fathom render --preset mandelbulb --integrator path --time-limit 30s --aperture 0.02 -o dof.png",
+        &[("--time-limit 30s", "--time-limit 1s")],
         SMALL,
         &[Image("dof.png", 96, 64)],
     ),
