@@ -238,7 +238,7 @@ mod tests {
         let mut child = std::process::Command::new(std::env::current_exe().unwrap())
             .args([
                 "--exact",
-                "atomic_file::tests::slow_writer_child",
+                "files::atomic_file::tests::slow_writer_child",
                 "--ignored",
                 "--nocapture",
             ])

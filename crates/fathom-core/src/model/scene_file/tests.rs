@@ -174,7 +174,7 @@ fn invalid_scenes_name_the_node_path() {
     );
     let e = parse(&text, "t.ron").unwrap_err().to_string();
     assert!(
-        e.starts_with("t.ron:4:55: root.children[0].material"),
+        e.starts_with("t.ron:4:74: root.children[0].material.specular = 3 is out of range [0, 1]"),
         "{e}"
     );
     // Rules with no place in the text keep the file name only.
