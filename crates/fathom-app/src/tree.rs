@@ -429,26 +429,32 @@ pub fn colour_from_f32(c: f32) -> f64 {
         .clamp(0.0, 1.0)
 }
 
+/// A colour button for the material field `name`; whether the user changed the colour. The
+/// picker converts to HSVA and back every frame it is open, which moves a component by a few
+/// ulps: only a change larger than that is the user's, and only such components are written.
+fn colour_editor(ui: &mut egui::Ui, colour: &mut [f64; 3], name: &str) -> bool {
+    let before = colour.map(|v| v as f32);
+    let mut c = before;
+    ui.horizontal(|ui| {
+        let r = ui.color_edit_button_rgb(&mut c);
+        crate::script::place("param", format!("Material.{name}"), &r);
+        ui.label(name);
+    });
+    let mut changed = false;
+    for ((dst, new), old) in colour.iter_mut().zip(c).zip(before) {
+        if (new - old).abs() > 1e-5 {
+            *dst = colour_from_f32(new);
+            changed = true;
+        }
+    }
+    changed
+}
+
 /// The material of a node (ranges as the scene validation checks them). Opening the colour
 /// picker is not an edit: only a component the user changed is written back.
 pub fn material_editor(ui: &mut egui::Ui, m: &mut Material) -> Edit {
     let mut edit = None;
-    let before = m.albedo.map(|v| v as f32);
-    let mut c = before;
-    ui.horizontal(|ui| {
-        let r = ui.color_edit_button_rgb(&mut c);
-        crate::script::place("param", "Material.albedo".into(), &r);
-        ui.label("albedo");
-    });
-    // The picker converts to HSVA and back every frame it is open, which moves a component
-    // by a few ulps: only a change larger than that is the user's.
-    let moved: Vec<usize> = (0..3)
-        .filter(|&i| (c[i] - before[i]).abs() > 1e-5)
-        .collect();
-    if !moved.is_empty() {
-        for i in moved {
-            m.albedo[i] = colour_from_f32(c[i]);
-        }
+    if colour_editor(ui, &mut m.albedo, "albedo") {
         edit = Some("set albedo".into());
     }
     if ui
@@ -475,20 +481,7 @@ pub fn material_editor(ui: &mut egui::Ui, m: &mut Material) -> Edit {
         keep(&mut edit, Some("set trap colour".into()));
     }
     ui.collapsing("path tracer", |ui| {
-        let before = m.emission.map(|v| v as f32);
-        let mut c = before;
-        ui.horizontal(|ui| {
-            let r = ui.color_edit_button_rgb(&mut c);
-            crate::script::place("param", "Material.emission".into(), &r);
-            ui.label("emission");
-        });
-        let moved: Vec<usize> = (0..3)
-            .filter(|&i| (c[i] - before[i]).abs() > 1e-5)
-            .collect();
-        if !moved.is_empty() {
-            for i in moved {
-                m.emission[i] = colour_from_f32(c[i]);
-            }
+        if colour_editor(ui, &mut m.emission, "emission") {
             keep(&mut edit, Some("set emission".into()));
         }
         // The single numbers, with the ranges and texts the scene format declares.
