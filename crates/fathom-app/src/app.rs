@@ -1334,7 +1334,10 @@ impl ExplorerApp {
                         .logarithmic(true)
                         .text("focus distance"),
                 )
-                .on_hover_text("0: the camera's target (orbit pivot) is in focus")
+                .on_hover_text(
+                    "0: the camera's target is in focus; clicking the surface makes the point \
+                     clicked the target (the orbit pivot), so a click focuses there",
+                )
                 .changed()
             {
                 p.focus_distance = (focus > 0.0).then_some(focus);

@@ -326,6 +326,36 @@ mod tests {
         assert!((c.eye.length() - 5.0 * 0.81).abs() < 1e-9);
     }
 
+    /// A click on the surface orbits it and makes it the camera's target, which is where the
+    /// path tracer focuses when its focus distance is left to the camera; the wheel moves
+    /// towards it and the focus follows.
+    #[test]
+    fn the_point_clicked_becomes_the_target_and_the_focus() {
+        let mut c = CameraController::new(&cam());
+        let p = DVec3::new(0.3, -0.2, 0.4);
+        c.orbit_around(p);
+        let focus = |c: &CameraController| {
+            let cam = c.camera();
+            (cam.target - cam.eye).length()
+        };
+        assert!((c.camera().target - p).length() < 1e-9);
+        let before = focus(&c);
+        c.step(
+            &Controls {
+                wheel: 1.0,
+                ..Controls::default()
+            },
+            1.0 / 60.0,
+            1.0,
+        );
+        let after = focus(&c);
+        assert!(
+            after < before,
+            "the wheel moved towards the pivot: {before} -> {after}"
+        );
+        assert!((c.camera().target - p).length() < 1e-6 * before);
+    }
+
     #[test]
     fn picking_finds_the_surface_of_a_sphere() {
         let tape = Tape::compile(&fathom_core::scenes::sphere(1.0)).unwrap();
