@@ -256,7 +256,7 @@ fn vertex_colours_follow_materials() {
     );
 }
 
-/// The spheres proptest found (CI, stop 29): marching cubes fanned a loop that crosses an
+/// The spheres proptest found in CI: marching cubes fanned a loop that crosses an
 /// ambiguous face twice through a diagonal joining that face's two segments; the neighbour
 /// across the face drew triangles on it too, and the edge was in more than two triangles.
 #[test]

@@ -21,6 +21,9 @@ pub enum ExploreRenderer {
     Gpu,
     /// The sparse voxel octree.
     Svo,
+    /// The path tracer: the preview while the view moves, samples accumulating while it is
+    /// still (docs/pathtrace.md).
+    Path,
 }
 
 /// Open the explorer window: fly through a scene and edit it live.
@@ -104,6 +107,7 @@ impl ExploreArgs {
             ExploreRenderer::Trace => Some(Backend::Trace),
             ExploreRenderer::Gpu => Some(Backend::Gpu),
             ExploreRenderer::Svo => Some(Backend::Octree),
+            ExploreRenderer::Path => Some(Backend::Path),
         };
         o.target_ms = self.target_ms;
         o.frames = self.frames;
