@@ -94,15 +94,15 @@ impl PathBackend {
         let first = self.samples();
         let wanted = p.spp.saturating_sub(first);
         let passes_done = std::sync::atomic::AtomicUsize::new(0);
-        let report = |tiles_done: usize, tiles: usize| match p.time_limit {
-            Some(limit) => control.report(
-                (t0.elapsed().as_secs_f64() * 1e3) as usize,
-                (limit * 1e3).max(1.0) as usize,
-            ),
-            None => control.report(
-                passes_done.load(std::sync::atomic::Ordering::Relaxed) * tiles + tiles_done,
-                wanted as usize * tiles,
-            ),
+        // Units are tiles. With a time limit the number of passes is not known ahead: the
+        // pass under way is reported as the last one, so the figure never passes 100 %.
+        let report = |tiles_done: usize, tiles: usize| {
+            let passes = passes_done.load(std::sync::atomic::Ordering::Relaxed);
+            let total = match p.time_limit {
+                Some(_) => passes + 1,
+                None => wanted as usize,
+            };
+            control.report(passes * tiles + tiles_done, total * tiles);
         };
         let pt_control = fathom_pathtrace::Control {
             cancel: control.cancel.map(|c| c.flag()),
@@ -135,16 +135,14 @@ impl PathBackend {
         let t1 = Instant::now();
         let image = self.progressive.frame();
         let noise = image.relative_noise();
-        let colour = if p.denoise {
+        let denoised = p.denoise.then(|| {
+            let run = || fathom_pathtrace::denoise(&image, &DenoiseSettings::default());
             match pool {
-                Some(pool) => {
-                    pool.install(|| fathom_pathtrace::denoise(&image, &DenoiseSettings::default()))
-                }
-                None => fathom_pathtrace::denoise(&image, &DenoiseSettings::default()),
+                Some(pool) => pool.install(run),
+                None => run(),
             }
-        } else {
-            image.colour.clone()
-        };
+        });
+        let colour = denoised.unwrap_or(image.colour);
         let whole = Frame {
             width: image.width,
             height: image.height,
@@ -363,7 +361,19 @@ mod tests {
         let mut s = Session::new(scene).unwrap();
         let mut req = request(16, 12, 1 << 20, 2);
         req.path.time_limit = Some(1e-6);
-        let r = s.render(&cam, &req).unwrap();
+        // Progress never passes its total, however long the pass takes against the limit.
+        let over = std::sync::atomic::AtomicBool::new(false);
+        let progress = |p: crate::Progress| {
+            if p.done > p.total {
+                over.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        };
+        let control = Control {
+            cancel: None,
+            progress: Some(&progress),
+        };
+        let r = s.render_with(&cam, &req, &control).unwrap();
         assert_eq!(r.stats.path.unwrap().samples_per_pixel, 1);
+        assert!(!over.load(std::sync::atomic::Ordering::Relaxed));
     }
 }
