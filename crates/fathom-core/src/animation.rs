@@ -5,4 +5,6 @@
 pub mod binding;
 pub mod camera_path;
 pub mod flight;
+pub mod flight_path;
 pub mod param_path;
+pub mod param_resolve;

@@ -2,6 +2,7 @@
 //! declared once ([`registry`]), the declarations themselves, how a call reads and writes in
 //! a scene file ([`call_serde`]), and the reference pages generated from them ([`docgen`]).
 
+pub mod call;
 pub mod call_serde;
 pub mod combine;
 pub mod docgen;

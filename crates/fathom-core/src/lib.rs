@@ -34,12 +34,12 @@ pub mod testing;
 
 // Every module keeps its path at the crate root (`fathom_core::scene`, `crate::tape`, ...), so
 // the folders above group the code without renaming what other crates use.
-pub use animation::{binding, camera_path, flight, param_path};
+pub use animation::{binding, camera_path, flight, flight_path, param_path, param_resolve};
 pub use family::{
-    call_serde, combine, docgen, fractals, modifiers, primitives, registry, transforms,
+    call, call_serde, combine, docgen, fractals, modifiers, primitives, registry, transforms,
 };
 pub use files::{atomic_file, cleanup, input_file};
-pub use model::{camera, presets, scene, scene_file, scenes};
+pub use model::{camera, presets, scene, scene_file, scenes, validate};
 pub use number::{dd, dd4, real, value, vec3};
 pub use program::{eval, reference, shared, tape};
 

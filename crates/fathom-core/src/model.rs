@@ -7,3 +7,4 @@ pub mod presets;
 pub mod scene;
 pub mod scene_file;
 pub mod scenes;
+pub mod validate;

@@ -12,8 +12,8 @@ pub enum FarmError {
     #[error("shard {index}/{count} is out of range: the index must be in 0..{count}")]
     ShardOutOfRange { index: usize, count: usize },
     /// A shard count of zero or above the limit.
-    #[error("shard count {0} is out of range 1..={max}", max = crate::shard::MAX_SHARDS)]
-    ShardCount(usize),
+    #[error("shard count {count} is out of range 1..={max}")]
+    ShardCount { count: usize, max: usize },
     /// A scheduler variable that is set but unusable.
     #[error("environment variable {name}={value:?} is not usable: {why}")]
     Env {
@@ -41,11 +41,14 @@ pub enum FarmError {
     },
     /// DIR has no manifest.
     #[error(
-        "{} is not a farm directory (no {}); create the job with `fathom farm slurm` or a `--shard` render",
-        dir.display(),
-        crate::manifest::MANIFEST
+        "{} is not a farm directory (no {manifest}); create the job with `fathom farm slurm` or a `--shard` render",
+        dir.display()
     )]
-    NotAFarm { dir: PathBuf },
+    NotAFarm {
+        dir: PathBuf,
+        /// The manifest's file name.
+        manifest: &'static str,
+    },
     /// A manifest written by an earlier build of fathom whose render settings lacked
     /// fields this build has (its job id is the hash of its fingerprint without them): this
     /// build would fill them with defaults and could render its units differently, so the job

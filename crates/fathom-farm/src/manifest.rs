@@ -308,7 +308,10 @@ impl FarmDir {
     pub fn open(dir: &Path) -> Result<FarmDir, FarmError> {
         let path = dir.join(MANIFEST);
         if !path.exists() {
-            return Err(FarmError::NotAFarm { dir: dir.into() });
+            return Err(FarmError::NotAFarm {
+                dir: dir.into(),
+                manifest: MANIFEST,
+            });
         }
         let bytes = read(&path)?;
         let manifest: Manifest =

@@ -30,7 +30,10 @@ impl Shard {
     /// A checked shard.
     pub fn new(index: usize, count: usize) -> Result<Shard, FarmError> {
         if count == 0 || count > MAX_SHARDS {
-            return Err(FarmError::ShardCount(count));
+            return Err(FarmError::ShardCount {
+                count,
+                max: MAX_SHARDS,
+            });
         }
         if index >= count {
             return Err(FarmError::ShardOutOfRange { index, count });
@@ -189,7 +192,10 @@ mod tests {
         assert!(e.contains("out of range") && e.contains("0..8"), "{e}");
         assert!(matches!(
             "0/0".parse::<Shard>(),
-            Err(FarmError::ShardCount(0))
+            Err(FarmError::ShardCount {
+                count: 0,
+                max: MAX_SHARDS
+            })
         ));
         for bad in ["3", "a/8", "3/", "-1/8", ""] {
             assert!(

@@ -19,4 +19,5 @@ pub mod shader;
 
 pub use device::Gpu;
 pub use error::GpuError;
-pub use renderer::{GpuValue, Projection, RenderOptions, RenderStats, Renderer};
+pub use passes::{RenderOptions, RenderStats};
+pub use renderer::{GpuValue, Projection, Renderer};

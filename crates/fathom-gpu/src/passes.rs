@@ -9,7 +9,7 @@
 
 use crate::error::GpuError;
 use crate::precision;
-use crate::renderer::Renderer;
+use crate::renderer::{Renderer, Targets};
 use fathom_core::frame::{Frame, NO_ID};
 use fathom_core::shared::PREPASS_LEVELS;
 use fathom_core::{Camera, Evaluator, Projection, Scene, Tape, V3};
@@ -185,17 +185,6 @@ pub(crate) fn rust_layouts() -> Vec<Layout> {
             misc: [u32; 4],
         }),
     ]
-}
-
-/// Buffers and the output texture for one output size (rebuilt only when it changes).
-pub(crate) struct Targets {
-    key: (u32, u32, u32),
-    globals: wgpu::Buffer,
-    gbuf: wgpu::Buffer,
-    counters: wgpu::Buffer,
-    /// The displayable result (8-bit sRGB), for a window to sample.
-    pub texture: wgpu::Texture,
-    group: wgpu::BindGroup,
 }
 
 /// Cells of all prepass levels for a `w` x `h` view and `eyes` eyes.

@@ -8,7 +8,6 @@ use crate::shader;
 use fathom_core::limits;
 use fathom_core::tape::Tape;
 
-pub use crate::passes::{RenderOptions, RenderStats};
 pub use fathom_core::Projection;
 
 /// Bytes of one material in the GPU table: albedo + specular, shininess + trap colour + 2 pad.
@@ -38,7 +37,18 @@ pub struct Renderer {
     /// Number of materials of the current tape.
     pub(crate) n_materials: u32,
     /// Render targets of the last image size, reused while the size stays.
-    pub(crate) targets: Option<crate::passes::Targets>,
+    pub(crate) targets: Option<Targets>,
+}
+
+/// Buffers and the output texture for one output size (rebuilt only when it changes).
+pub(crate) struct Targets {
+    pub(crate) key: (u32, u32, u32),
+    pub(crate) globals: wgpu::Buffer,
+    pub(crate) gbuf: wgpu::Buffer,
+    pub(crate) counters: wgpu::Buffer,
+    /// The displayable result (8-bit sRGB), for a window to sample.
+    pub texture: wgpu::Texture,
+    pub(crate) group: wgpu::BindGroup,
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {

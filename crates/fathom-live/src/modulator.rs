@@ -7,9 +7,10 @@
 
 use crate::error::LiveError;
 use crate::osc::{LevelSlot, Listener, OscCounters, Route, Routes, Shared};
-use fathom_core::binding::{Binding, Source, validate_bindings};
+use fathom_core::binding::{Binding, Source};
 use fathom_core::param_path::ParamPath;
 use fathom_core::scene::Scene;
+use fathom_core::validate::validate_bindings;
 use rosc::address::Matcher;
 use serde::Serialize;
 use std::net::SocketAddr;

@@ -9,29 +9,13 @@
 //! rays skip empty space without a tree query. Zooming in therefore shows the points
 //! themselves, down to the sphere radius, instead of a grid's blur.
 
+use crate::cell::Cell;
 use crate::error::{MicroError, check_range};
 use crate::grid::Grid;
 use crate::limits;
-use crate::texture::Cell;
+use crate::rng::Rng;
 use glam::{DMat3, DVec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-
-/// SplitMix64: small, fast, deterministic.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// One affine map `p -> linear p + offset`, chosen with `probability`.
 #[derive(Clone, Debug)]

@@ -2,9 +2,9 @@
 //! with trilinear interpolation (the seed's "precomputed distance fields"), with the error
 //! against the exact field measured rather than assumed.
 
+use crate::cell::Cell;
 use crate::error::{MicroError, check_range};
 use crate::limits;
-use crate::texture::Cell;
 use fathom_core::{Evaluator, Tape, V3};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -127,7 +127,7 @@ impl Grid {
         samples: usize,
     ) -> GridError {
         let mut ev = Evaluator::<f64>::new();
-        let mut rng = crate::chaos::Rng(0x005e_ed0f_9e1d);
+        let mut rng = crate::rng::Rng(0x005e_ed0f_9e1d);
         let mut e = GridError {
             samples,
             ..Default::default()

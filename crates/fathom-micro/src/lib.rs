@@ -18,6 +18,7 @@
 pub mod alone;
 pub mod anim;
 pub mod bvh;
+pub mod cell;
 pub mod chaos;
 pub mod demo;
 pub mod error;
@@ -28,6 +29,7 @@ pub mod march;
 pub mod mesh;
 pub mod render;
 pub mod request;
+pub mod rng;
 pub mod shade;
 pub mod shell;
 pub mod tet;

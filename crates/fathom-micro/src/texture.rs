@@ -15,24 +15,7 @@ use fathom_core::scene::{Material, Scene};
 use fathom_core::{Evaluator, Tape, V3};
 use glam::DVec3;
 
-/// A box of texture-scene space.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cell {
-    pub min: DVec3,
-    pub max: DVec3,
-}
-
-impl Cell {
-    /// The cube [-1, 1]^3, which most presets fill.
-    pub const UNIT: Cell = Cell {
-        min: DVec3::splat(-1.0),
-        max: DVec3::splat(1.0),
-    };
-
-    pub fn size(&self) -> DVec3 {
-        self.max - self.min
-    }
-}
+pub use crate::cell::Cell;
 
 /// How shell coordinates map to texture-scene space.
 #[derive(Clone, Debug, PartialEq)]

@@ -4,8 +4,8 @@
 
 use crate::request::RequestError;
 use fathom_core::camera::CameraError;
-use fathom_core::scene::SceneError;
 use fathom_core::tape::CompileError;
+use fathom_core::validate::SceneError;
 use fathom_gpu::GpuError;
 use fathom_svo::OctreeError;
 use fathom_trace::TraceError;

@@ -4,10 +4,11 @@
 //! modulation (LFO bindings at the frame's time), then the session takes the scene (parameters
 //! re-baked, never recompiled: the structure does not change along a path) and renders it.
 
+use crate::backend::Rendered;
 use crate::control::Control;
 use crate::error::RenderError;
 use crate::request::RenderRequest;
-use crate::session::{Rendered, SceneChange, Session};
+use crate::session::{SceneChange, Session};
 use fathom_core::flight::{Flight, Pose};
 use fathom_core::scene::Scene;
 use serde::Serialize;

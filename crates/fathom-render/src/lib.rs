@@ -12,31 +12,30 @@
 //! - [`zoom`]: the octree's zoom loop with its precision guard;
 //! - [`compare`]: an octree frame against the sphere tracer's (SSIM, silhouette IoU, colour);
 //! - [`flight`]: a scene's flight path rendered frame by frame (`fathom render --path`);
-//! - `gpu`, `octree`, `volume`, `path`: the backends with state of their own (the path
-//!   tracer's is its accumulator, which refines a still view across renders).
+//! - `backend`: the backends with state of their own (`gpu`, `octree`, `volume`, `path`: the
+//!   path tracer's state is its accumulator, which refines a still view across renders) and
+//!   the types they share with the session ([`Rendered`], [`Counters`]).
 //!
 //! Regions (a rectangle of a larger image): the CPU tracer renders only the tiles a region
 //! needs, bit-identical to the same pixels of the whole render (SSAO and prepass borders
 //! included); the GPU and octree backends render the whole frame and crop it (the same
 //! pixels, no time saved).
 
+mod backend;
 pub mod compare;
 pub mod control;
 pub mod error;
 pub mod flight;
-mod gpu;
-mod octree;
-mod path;
 pub mod request;
 pub mod session;
 pub mod stats;
-mod volume;
 pub mod zoom;
 
+pub use backend::{Counters, Rendered};
 pub use control::{CancelToken, Control, Progress};
 pub use error::RenderError;
 pub use request::{Backend, OctreeSettings, PathRequest, RenderRequest, RequestError, TracerRule};
-pub use session::{Counters, Rendered, SceneChange, Session};
+pub use session::{SceneChange, Session};
 pub use stats::Stats;
 
 #[cfg(test)]

@@ -10,10 +10,13 @@
 //!   `fathom_trace::post::finish_view` for every backend; stereo views are finished eye by
 //!   eye; a region comes back as just its pixels.
 
+use crate::backend::gpu::GpuBackend;
+use crate::backend::octree::OctreeBackend;
+use crate::backend::path::PathBackend;
+use crate::backend::volume::VolumeBackend;
+use crate::backend::{Counters, Rendered};
 use crate::control::Control;
 use crate::error::RenderError;
-use crate::gpu::GpuBackend;
-use crate::octree::OctreeBackend;
 use crate::request::{Backend, RenderRequest};
 use crate::stats::Stats;
 use fathom_core::frame::Frame;
@@ -41,31 +44,6 @@ pub enum SceneChange {
     Recompiled,
 }
 
-/// How often the session compiled or updated its tape (the proof that slider edits compile
-/// nothing).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-pub struct Counters {
-    /// Full compilations of the tape (the first one included).
-    pub compiles: u64,
-    /// Parameter-buffer updates without compilation.
-    pub param_updates: u64,
-    /// Tape uploads to the GPU (a parameter edit rewrites only the parameter buffer).
-    pub gpu_uploads: u64,
-    /// Octree explorers built (each scene or octree-setting change builds one).
-    pub octrees_built: u64,
-    /// Density grids sampled for the volume backend (each scene or volume-setting change).
-    pub volumes_sampled: u64,
-    /// Path-tracing accumulators started (each change of view, scene or path settings).
-    pub path_accumulators: u64,
-}
-
-/// A finished frame and what it cost.
-#[derive(Clone, Debug)]
-pub struct Rendered {
-    pub frame: Frame,
-    pub stats: Stats,
-}
-
 /// The scene, its tape and the backends' state. See the module documentation.
 pub struct Session {
     scene: Scene,
@@ -78,8 +56,8 @@ pub struct Session {
     pool: Option<(usize, rayon::ThreadPool)>,
     gpu: Option<GpuBackend>,
     octree: Option<OctreeBackend>,
-    volume: Option<crate::volume::VolumeBackend>,
-    path: Option<crate::path::PathBackend>,
+    volume: Option<VolumeBackend>,
+    path: Option<PathBackend>,
 }
 
 impl Session {
@@ -250,7 +228,7 @@ impl Session {
             }
             Backend::Volume => {
                 let key = self.shading_generation;
-                let vb = crate::volume::VolumeBackend::get(
+                let vb = VolumeBackend::get(
                     &mut self.volume,
                     &scene,
                     &self.tape,
@@ -263,7 +241,7 @@ impl Session {
             }
             Backend::Path => {
                 let key = self.shading_generation;
-                let pb = crate::path::PathBackend::get(
+                let pb = PathBackend::get(
                     &mut self.path,
                     &scene,
                     &self.tape,
@@ -440,9 +418,4 @@ fn trace(
         frame,
         stats: Stats::from_trace(&s),
     })
-}
-
-/// A progress report for backends that render in one piece: done.
-pub(crate) fn report_done(control: &Control) {
-    control.report(1, 1);
 }

@@ -337,7 +337,7 @@ fn path_render(a: &LiveBenchArgs) -> Result<serde_json::Value, String> {
         ..RenderArgs::defaults()
     };
     let start = Instant::now();
-    let r = crate::cmd_render::run(args);
+    let r = crate::render(args);
     let secs = start.elapsed().as_secs_f64();
     let written = std::fs::read_dir(dir.join("frames")).map_or(0, |d| d.count());
     std::fs::remove_dir_all(&dir).ok();

@@ -244,7 +244,7 @@ mod tests {
     #[test]
     fn a_path_renders_to_numbered_frames_and_a_video() {
         let dir = std::env::temp_dir().join(format!("fathom-path-{}", std::process::id()));
-        crate::cmd_render::run(args(&dir, "dive", 4)).unwrap();
+        crate::render(args(&dir, "dive", 4)).unwrap();
         let names: Vec<PathBuf> = (0..4)
             .map(|i| dir.join(format!("dive-0000{i}.png")))
             .collect();
@@ -273,12 +273,12 @@ mod tests {
         let text = String::from_utf8_lossy(&probe.stdout);
         assert_eq!(text.trim(), "32,24,4", "{text}");
         // Names that are not there are explained.
-        let e = crate::cmd_render::run(args(&dir, "diev", 2)).unwrap_err();
+        let e = crate::render(args(&dir, "diev", 2)).unwrap_err();
         assert!(e.contains("did you mean `dive`"), "{e}");
         let mut plain = args(&dir, "dive", 2);
         plain.scene = None;
         plain.preset = Some("menger".into());
-        let e = crate::cmd_render::run(plain).unwrap_err();
+        let e = crate::render(plain).unwrap_err();
         assert!(e.contains("has no paths"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
@@ -292,7 +292,7 @@ mod tests {
         let mut a = args(&dir, "dive", 3);
         a.output = dir.join("f-##.exr");
         a.camera_path = Some(dir.join("cam.glb"));
-        let e = crate::cmd_render::run(a).unwrap_err();
+        let e = crate::render(a).unwrap_err();
         assert!(e.contains("--camera-path") && e.contains("fov"), "{e}");
         assert!(!dir.join("cam.glb").exists() && !dir.join("f-01.exr").exists());
         // The same path at one fov.
@@ -308,7 +308,7 @@ mod tests {
         a.scene = Some(file);
         a.output = dir.join("f-##.exr");
         a.camera_path = Some(dir.join("cam.glb"));
-        crate::cmd_render::run(a).unwrap();
+        crate::render(a).unwrap();
         for i in 0..3 {
             let bytes = std::fs::read(dir.join(format!("f-0{i}.exr"))).unwrap();
             assert_eq!(
@@ -326,7 +326,7 @@ mod tests {
         // A bad extension fails before any work.
         let mut a = args(&dir, "dive", 2);
         a.output = dir.join("f-##.jpg");
-        assert!(crate::cmd_render::run(a).unwrap_err().contains("`jpg`"));
+        assert!(crate::render(a).unwrap_err().contains("`jpg`"));
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -527,7 +527,7 @@ pub const DEFAULT_SIZE: (u32, u32) = (1280, 720);
 
 /// A Mandelbulber `.fract` scene renders at its own image size unless --size says otherwise
 /// (its camera's framing belongs to that aspect ratio).
-fn size_from_fract(a: &mut RenderArgs) -> Result<(), String> {
+pub fn size_from_fract(a: &mut RenderArgs) -> Result<(), String> {
     if a.size.is_some() {
         return Ok(());
     }
@@ -541,16 +541,10 @@ fn size_from_fract(a: &mut RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
-pub fn run(mut a: RenderArgs) -> Result<(), String> {
+/// `fathom render` of one image (`--shard`/`--tiles` and `--path` are dispatched by
+/// [`crate::render`] before this).
+pub fn run(a: RenderArgs) -> Result<(), String> {
     let start = Instant::now();
-    size_from_fract(&mut a)?;
-    if a.shard.is_some() || a.tiles.is_some() {
-        return crate::cmd_farm::render_shard(&a);
-    }
-    if a.path.is_some() {
-        let scene = load_scene(&a)?;
-        return crate::cmd_flight::run(&a, scene);
-    }
     let req = a.request()?;
     let kind = output::ImageKind::for_path(&a.output, a.bit_depth).map_err(|e| e.to_string())?;
     let scene = load_scene(&a)?;

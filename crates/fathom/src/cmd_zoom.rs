@@ -346,10 +346,8 @@ fn side_by_side(
     f
 }
 
+/// `fathom zoom` on this machine (`--shard` is dispatched by [`crate::zoom`] before this).
 pub fn run(a: ZoomArgs) -> Result<(), String> {
-    if a.shard.is_some() {
-        return crate::cmd_farm::zoom_shard(&a);
-    }
     // The stats file is checked before the frames are rendered, not after.
     if let Some(path) = &a.stats {
         fathom_core::atomic_file::AtomicFile::create(path)

@@ -102,10 +102,10 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         None => cmd_explore::run_without_arguments(),
-        Some(Command::Render(a)) => cmd_render::run(*a),
+        Some(Command::Render(a)) => render(*a),
         Some(Command::List(a)) => cmd_list::run(a),
         Some(Command::Scene(a)) => cmd_scene::run(a),
-        Some(Command::Zoom(a)) => cmd_zoom::run(a),
+        Some(Command::Zoom(a)) => zoom(a),
         Some(Command::Micro(a)) => cmd_micro::run(*a),
         Some(Command::Mesh(a)) => cmd_mesh::run(*a),
         Some(Command::Import(a)) => cmd_import::run(a),
@@ -122,6 +122,29 @@ fn main() -> ExitCode {
             eprintln!("fathom: error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `fathom render`: a farm shard (`--shard`, `--tiles`), a flight path's frames (`--path`)
+/// or one image. The size of a `.fract` scene is Mandelbulber's unless `--size` is given.
+fn render(mut a: cmd_render::RenderArgs) -> Result<(), String> {
+    cmd_render::size_from_fract(&mut a)?;
+    if a.shard.is_some() || a.tiles.is_some() {
+        cmd_farm::render_shard(&a)
+    } else if a.path.is_some() {
+        let scene = cmd_render::load_scene(&a)?;
+        cmd_flight::run(&a, scene)
+    } else {
+        cmd_render::run(a)
+    }
+}
+
+/// `fathom zoom`: a farm shard (`--shard`) or the whole zoom here.
+fn zoom(a: cmd_zoom::ZoomArgs) -> Result<(), String> {
+    if a.shard.is_some() {
+        cmd_farm::zoom_shard(&a)
+    } else {
+        cmd_zoom::run(a)
     }
 }
 

@@ -9,7 +9,6 @@
 //! in the `fathom-live` crate.
 
 use crate::param_path::{ParamPath, ParamPathError};
-use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -228,7 +227,7 @@ impl OscInput {
 
 impl Binding {
     /// The parameter value for a source level in [0, 1] (before clamping to the declared
-    /// range, which [`crate::param_path::Resolved::set`] does).
+    /// range, which [`crate::param_resolve::Resolved::set`] does).
     pub fn map(&self, level: f64) -> f64 {
         self.to.0 + level * (self.to.1 - self.to.0)
     }
@@ -277,24 +276,12 @@ pub fn plausible_osc_address(a: &str) -> bool {
 }
 
 impl Binding {
-    /// Checks the binding against `scene`. The error's first part says where inside the
-    /// binding (`.source`, `.to`).
-    pub fn validate(&self, scene: &Scene) -> Result<(), (&'static str, BindingError)> {
-        let r = ParamPath::parse(&self.param)
-            .and_then(|p| p.resolve(scene))
-            .map_err(|e| (".param", BindingError::Param(e)))?;
-        let (lo, hi) = self.to;
-        if !(r.range.contains(lo) && r.range.contains(hi)) {
-            return Err((
-                ".to",
-                BindingError::To {
-                    param: self.param.clone(),
-                    lo,
-                    hi,
-                    range: r.range.describe(),
-                },
-            ));
-        }
+    /// Checks what can be checked without a scene: the path's syntax, the smoothing and the
+    /// source. The error's first part says where inside the binding (`.param`, `.source`).
+    /// That the path names a number of a scene and `to` lies in its range is checked with
+    /// the scene ([`crate::validate::validate_bindings`]).
+    pub fn check(&self) -> Result<(), (&'static str, BindingError)> {
+        ParamPath::parse(&self.param).map_err(|e| (".param", BindingError::Param(e)))?;
         let s = self.smoothing;
         if !(s.is_finite() && (0.0..=MAX_SMOOTHING).contains(&s)) {
             return Err((".smoothing", BindingError::Smoothing { value: s }));
@@ -331,23 +318,6 @@ impl Binding {
         }
         Ok(())
     }
-}
-
-/// Checks a scene's bindings; the error names where (`bindings[1].param`).
-pub fn validate_bindings(scene: &Scene) -> Result<(), (String, BindingError)> {
-    if scene.bindings.len() > MAX_BINDINGS {
-        return Err((
-            "bindings".into(),
-            BindingError::TooMany {
-                count: scene.bindings.len(),
-            },
-        ));
-    }
-    for (i, b) in scene.bindings.iter().enumerate() {
-        b.validate(scene)
-            .map_err(|(what, e)| (format!("bindings[{i}]{what}"), e))?;
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -24,207 +24,27 @@
 
 pub mod spline;
 
-use crate::camera::{Camera, CameraError};
-use crate::param_path::{ParamPath, ParamPathError, ParamRange, Resolved};
+use crate::camera::Camera;
+use crate::param_path::{ParamPath, ParamRange};
+use crate::param_resolve::Resolved;
 use crate::scene::Scene;
 use crate::tape::Tape;
 use glam::{DMat3, DQuat, DVec3};
-use serde::{Deserialize, Serialize};
 use spline::CentripetalSegment;
 use std::collections::BTreeMap;
-use thiserror::Error;
 
-/// Most flight paths in one scene.
-pub const MAX_PATHS: usize = 64;
-/// Most keyframes in one path.
-pub const MAX_KEYS: usize = 4096;
-/// Most parameter values on one keyframe.
-pub const MAX_KEY_PARAMS: usize = 64;
-/// Longest path, in seconds.
-pub const MAX_DURATION: f64 = 1e6;
+pub use crate::flight_path::{
+    FlightError, FlightPath, Keyframe, MAX_DURATION, MAX_KEY_PARAMS, MAX_KEYS, MAX_PATHS,
+};
+
 /// Samples per segment of the table that paces a path by perceived length.
 const TABLE_SAMPLES: usize = 64;
-
-fn default_duration() -> f64 {
-    10.0
-}
-fn default_up() -> DVec3 {
-    DVec3::Y
-}
-fn default_fov() -> f64 {
-    45.0
-}
-fn yes() -> bool {
-    true
-}
-fn is_true(b: &bool) -> bool {
-    *b
-}
-fn is_zero(x: &f64) -> bool {
-    *x == 0.0
-}
-
-/// A named camera path.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct FlightPath {
-    /// Name (`fathom render --path NAME`); unique within the scene.
-    pub name: String,
-    /// Length in seconds, (0, 1e6].
-    #[serde(default = "default_duration")]
-    pub duration: f64,
-    /// Seconds of constant acceleration from rest at the start.
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub ease_in: f64,
-    /// Seconds of constant deceleration to rest at the end.
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub ease_out: f64,
-    /// Pace by distance relative to the surface (true) or by plain distance (false).
-    #[serde(default = "yes", skip_serializing_if = "is_true")]
-    pub scale_aware: bool,
-    /// At least two.
-    pub keys: Vec<Keyframe>,
-}
-
-/// One key of a flight path: a camera, and optionally values for any parameters.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Keyframe {
-    pub eye: DVec3,
-    /// A point looked at (the orientation comes from the direction; the distance is kept as
-    /// the camera's focus distance).
-    pub target: DVec3,
-    #[serde(default = "default_up")]
-    pub up: DVec3,
-    /// Vertical field of view, degrees (0, 179].
-    #[serde(default = "default_fov")]
-    pub fov: f64,
-    /// Pins this key to a time (seconds from the start); only keys between the first (at 0)
-    /// and the last (at `duration`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub time: Option<f64>,
-    /// The key's scale: its distance to the surface. Default: the distance estimate at the
-    /// eye (or the distance to the target where there is none).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub scale: Option<f64>,
-    /// Parameter values at this key, by parameter path (`"root.shape.power": 8.0`).
-    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
-    pub params: BTreeMap<String, f64>,
-}
-
-impl Keyframe {
-    /// A key at a camera (no pinned time, scale or parameters).
-    pub fn from_camera(c: &Camera) -> Keyframe {
-        Keyframe {
-            eye: c.eye,
-            target: c.target,
-            up: c.up,
-            fov: c.fov,
-            time: None,
-            scale: None,
-            params: BTreeMap::new(),
-        }
-    }
-
-    /// The key's camera.
-    pub fn camera(&self) -> Camera {
-        Camera {
-            eye: self.eye,
-            target: self.target,
-            up: self.up,
-            fov: self.fov,
-        }
-    }
-}
 
 /// The distance estimate at `eye`: the scale a key recorded there gets. `None` where the
 /// estimate is not a positive finite number (inside the surface).
 pub fn surface_scale(tape: &Tape, eye: DVec3) -> Option<f64> {
     let d = tape.eval_f64([eye.x, eye.y, eye.z]).d;
     (d.is_finite() && d > 0.0).then_some(d)
-}
-
-/// What is wrong with a flight path. The scene's error adds where (`paths[0].keys[2]`).
-#[derive(Clone, Debug, PartialEq, Error)]
-pub enum FlightError {
-    #[error("a flight path needs a non-empty name")]
-    NoName,
-    #[error("two paths are named `{name}`; path names must be unique")]
-    Duplicate { name: String },
-    #[error("{count} flight paths; the limit is {MAX_PATHS}")]
-    TooManyPaths { count: usize },
-    #[error(
-        "path `{name}` has {count} keyframe(s); its spline needs at least 2 (a start and an end)"
-    )]
-    TooFewKeys { name: String, count: usize },
-    #[error("path `{name}` has {count} keyframes; the limit is {MAX_KEYS}")]
-    TooManyKeys { name: String, count: usize },
-    #[error("duration = {value} s is out of range (0, {MAX_DURATION}]")]
-    Duration { value: f64 },
-    #[error(
-        "ease_in = {ease_in} s and ease_out = {ease_out} s must be >= 0 and together at most \
-         the duration ({duration} s)"
-    )]
-    Ease {
-        ease_in: f64,
-        ease_out: f64,
-        duration: f64,
-    },
-    #[error("{0}")]
-    Camera(CameraError),
-    #[error(
-        "time = {value}: only keys between the first and the last can be pinned (the first is \
-         at 0 s, the last at the path's duration); remove `time` here"
-    )]
-    PinnedEnd { value: f64 },
-    #[error(
-        "time = {value} s must lie after the previous pinned key ({after} s) and before the \
-         path's end ({before} s)"
-    )]
-    TimeOrder { value: f64, after: f64, before: f64 },
-    #[error("scale = {value} must be a finite number > 0 (the key's distance to the surface)")]
-    Scale { value: f64 },
-    #[error("{count} parameter values; the limit per key is {MAX_KEY_PARAMS}")]
-    TooManyParams { count: usize },
-    #[error("{0}")]
-    Param(ParamPathError),
-    #[error("`{path}` = {value} is out of range {range}")]
-    ParamRange {
-        path: String,
-        value: f64,
-        range: String,
-    },
-    #[error("no flight path is named `{name}`; {hint}")]
-    Unknown { name: String, hint: String },
-}
-
-/// Checks a scene's paths; the error names where (`paths[1].keys[0].fov`).
-pub fn validate_paths(scene: &Scene) -> Result<(), (String, FlightError)> {
-    if scene.paths.len() > MAX_PATHS {
-        return Err((
-            "paths".into(),
-            FlightError::TooManyPaths {
-                count: scene.paths.len(),
-            },
-        ));
-    }
-    for (i, p) in scene.paths.iter().enumerate() {
-        let at = |what: &str| format!("paths[{i}]{what}");
-        if p.name.trim().is_empty() {
-            return Err((at(".name"), FlightError::NoName));
-        }
-        if scene.paths[..i].iter().any(|q| q.name == p.name) {
-            return Err((
-                at(".name"),
-                FlightError::Duplicate {
-                    name: p.name.clone(),
-                },
-            ));
-        }
-        p.validate(scene)
-            .map_err(|(what, e)| (format!("paths[{i}]{what}"), e))?;
-    }
-    Ok(())
 }
 
 impl FlightPath {
@@ -260,86 +80,6 @@ impl FlightPath {
             params: BTreeMap::new(),
         };
         FlightPath::new("zoom", 1.0, vec![key(start), key(start / depth)])
-    }
-
-    /// Checks the path against `scene` (its parameter paths must exist there). The error's
-    /// first part says where inside the path (`.keys[2].fov`).
-    pub fn validate(&self, scene: &Scene) -> Result<(), (String, FlightError)> {
-        let name = self.name.clone();
-        let n = self.keys.len();
-        if n < 2 {
-            return Err((".keys".into(), FlightError::TooFewKeys { name, count: n }));
-        }
-        if n > MAX_KEYS {
-            return Err((".keys".into(), FlightError::TooManyKeys { name, count: n }));
-        }
-        let d = self.duration;
-        if !(d.is_finite() && d > 0.0 && d <= MAX_DURATION) {
-            return Err((".duration".into(), FlightError::Duration { value: d }));
-        }
-        let (a, b) = (self.ease_in, self.ease_out);
-        if !(a.is_finite() && b.is_finite() && a >= 0.0 && b >= 0.0 && a + b <= d) {
-            return Err((
-                ".ease_in".into(),
-                FlightError::Ease {
-                    ease_in: a,
-                    ease_out: b,
-                    duration: d,
-                },
-            ));
-        }
-        let mut after = 0.0;
-        for (k, key) in self.keys.iter().enumerate() {
-            let at = |what: &str| format!(".keys[{k}]{what}");
-            key.camera()
-                .validate()
-                .map_err(|e| (at(""), FlightError::Camera(e)))?;
-            if let Some(t) = key.time {
-                if k == 0 || k + 1 == n {
-                    return Err((at(".time"), FlightError::PinnedEnd { value: t }));
-                }
-                if !(t.is_finite() && t > after && t < d) {
-                    return Err((
-                        at(".time"),
-                        FlightError::TimeOrder {
-                            value: t,
-                            after,
-                            before: d,
-                        },
-                    ));
-                }
-                after = t;
-            }
-            if let Some(s) = key.scale
-                && !(s.is_finite() && s > 0.0)
-            {
-                return Err((at(".scale"), FlightError::Scale { value: s }));
-            }
-            if key.params.len() > MAX_KEY_PARAMS {
-                return Err((
-                    at(".params"),
-                    FlightError::TooManyParams {
-                        count: key.params.len(),
-                    },
-                ));
-            }
-            for (path, &value) in &key.params {
-                let r = ParamPath::parse(path)
-                    .and_then(|p| p.resolve(scene))
-                    .map_err(|e| (at(".params"), FlightError::Param(e)))?;
-                if !r.range.contains(value) {
-                    return Err((
-                        at(".params"),
-                        FlightError::ParamRange {
-                            path: path.clone(),
-                            value,
-                            range: r.range.describe(),
-                        },
-                    ));
-                }
-            }
-        }
-        Ok(())
     }
 
     /// Changes the duration, scaling pinned times and easing with it.

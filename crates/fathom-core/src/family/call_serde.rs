@@ -2,8 +2,8 @@
 //! for entries without parameters. Parameters left out take their defaults; each value is
 //! checked against its declared kind and range as it is read, so errors point at it.
 
+use crate::call::Call;
 use crate::registry::{Family, ParamKind};
-use crate::scene::Call;
 use serde::de::{self, DeserializeSeed, EnumAccess, MapAccess, SeqAccess, VariantAccess, Visitor};
 use serde::ser::{SerializeStructVariant, SerializeTuple};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};

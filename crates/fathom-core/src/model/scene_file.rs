@@ -8,7 +8,8 @@
 //! limit, so absurd nesting is an error and not a stack overflow) and [`Scene::validate`].
 
 use crate::limits;
-use crate::scene::{SCENE_VERSION, Scene, SceneError};
+use crate::scene::{SCENE_VERSION, Scene};
+use crate::validate::SceneError;
 use std::path::Path;
 use thiserror::Error;
 

@@ -100,7 +100,7 @@ impl Instr {
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum CompileError {
     #[error("invalid scene: {0}")]
-    Invalid(#[from] crate::scene::SceneError),
+    Invalid(#[from] crate::validate::SceneError),
     #[error("the tape would have {0} instructions; the limit is {max}", max = limits::MAX_TAPE_LEN)]
     TooLong(usize),
     #[error("the parameter buffer would have {0} slots; the limit is {max}", max = limits::MAX_PARAMS)]
@@ -399,7 +399,8 @@ mod tests {
     use crate::combine::Combine;
     use crate::primitives::Primitive;
     use crate::reference::eval_tree;
-    use crate::scene::{Ifs, SceneError};
+    use crate::scene::Ifs;
+    use crate::validate::SceneError;
 
     fn two_spheres() -> Scene {
         Scene::new(

@@ -8,9 +8,9 @@
 //! subdivides within a time budget. Frames go through the shared post effects; regions are
 //! cropped from the whole frame.
 
+use crate::backend::{Counters, Rendered, report_done};
 use crate::control::Control;
 use crate::request::RenderRequest;
-use crate::session::{Counters, Rendered, report_done};
 use crate::stats::{OctreeStats, Stats, Timings};
 use fathom_core::frame::{Frame, Rect};
 use fathom_core::{Camera, Scene};

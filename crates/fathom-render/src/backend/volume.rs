@@ -11,9 +11,9 @@
 //! Regions are cropped from the whole frame; stereo and geometry-only frames are refused by
 //! [`crate::RenderRequest::validate`].
 
+use crate::backend::{Counters, Rendered, report_done};
 use crate::control::Control;
 use crate::request::{RenderRequest, VolumeSettings};
-use crate::session::{Counters, Rendered, report_done};
 use crate::stats::{Stats, Timings};
 use fathom_core::{Camera, Scene, Tape};
 use fathom_volume::integrator::VolumeScene;

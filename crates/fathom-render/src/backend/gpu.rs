@@ -5,9 +5,9 @@
 //! region's crop. Regions are supported by rendering the whole frame and cropping it (the
 //! same pixels as the whole render, at the whole render's cost).
 
+use crate::backend::{Counters, Rendered};
 use crate::control::Control;
 use crate::request::RenderRequest;
-use crate::session::{Counters, Rendered};
 use crate::stats::{DeCounts, Stats, Timings};
 use fathom_core::frame::{Frame, Rect};
 use fathom_core::{Camera, Scene, Tape};

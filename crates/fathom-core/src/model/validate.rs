@@ -1,13 +1,19 @@
 //! Scene validation: the version, every parameter against its declaration, materials, lights,
-//! render settings and the structural limits of [`crate::limits`], with a typed error that
-//! names the node (its path in the tree) or setting that failed, so a GUI can point at it and
-//! the command line prints it as text.
+//! render settings and the structural limits of [`crate::limits`], and (separately) the flight
+//! paths and bindings against the tree, with a typed error that names the node (its path in
+//! the tree) or setting that failed, so a GUI can point at it and the command line prints it
+//! as text. It sits above the scene model and the animation data it checks.
 
-use super::fields::{LIGHT_FIELDS, MATERIAL_FIELDS, RENDER_FIELDS};
-use super::{Node, SCENE_VERSION, Scene};
+use crate::binding::{Binding, BindingError, MAX_BINDINGS};
 use crate::camera::CameraError;
+use crate::flight_path::{
+    FlightError, FlightPath, MAX_DURATION, MAX_KEY_PARAMS, MAX_KEYS, MAX_PATHS,
+};
 use crate::limits;
+use crate::param_path::ParamPath;
 use crate::registry::EntryError;
+use crate::scene::fields::{LIGHT_FIELDS, MATERIAL_FIELDS, RENDER_FIELDS};
+use crate::scene::{Node, SCENE_VERSION, Scene};
 use thiserror::Error;
 
 /// The first rule a scene breaks. Node paths look like `root.children[1].ops[0]`.
@@ -47,16 +53,10 @@ pub enum SceneError {
     Light { index: usize },
     /// A flight path breaks a rule; `path` says where (`paths[0].keys[2].fov`).
     #[error("{path}: {error}")]
-    Flight {
-        path: String,
-        error: crate::flight::FlightError,
-    },
+    Flight { path: String, error: FlightError },
     /// A modulation binding breaks a rule; `path` says where (`bindings[1].param`).
     #[error("{path}: {error}")]
-    Binding {
-        path: String,
-        error: crate::binding::BindingError,
-    },
+    Binding { path: String, error: BindingError },
     /// A render setting out of its range (`name` is the field of `render`).
     #[error("render.{name} = {value} is out of range [{min}, {max}]")]
     Render {
@@ -135,15 +135,13 @@ impl Scene {
         self.validate_render()
     }
 
-    /// Checks the flight paths and modulation bindings: the rules of [`crate::flight`] and
+    /// Checks the flight paths and modulation bindings: the rules of [`crate::flight_path`] and
     /// [`crate::binding`], and that every parameter path they name exists in this scene.
     /// Separate from [`Scene::validate`], which is what rendering needs: an edited tree can
     /// leave a binding stale without making the scene unrenderable. Scene files check both.
     pub fn validate_animation(&self) -> Result<(), SceneError> {
-        crate::flight::validate_paths(self)
-            .map_err(|(path, error)| SceneError::Flight { path, error })?;
-        crate::binding::validate_bindings(self)
-            .map_err(|(path, error)| SceneError::Binding { path, error })
+        validate_paths(self).map_err(|(path, error)| SceneError::Flight { path, error })?;
+        validate_bindings(self).map_err(|(path, error)| SceneError::Binding { path, error })
     }
 
     fn validate_render(&self) -> Result<(), SceneError> {
@@ -194,4 +192,153 @@ fn validate_node(n: &Node, path: &str) -> Result<(), SceneError> {
         validate_node(c, &format!("{path}.children[{i}]"))?;
     }
     Ok(())
+}
+
+/// Checks a scene's bindings; the error names where (`bindings[1].param`).
+pub fn validate_bindings(scene: &Scene) -> Result<(), (String, BindingError)> {
+    if scene.bindings.len() > MAX_BINDINGS {
+        return Err((
+            "bindings".into(),
+            BindingError::TooMany {
+                count: scene.bindings.len(),
+            },
+        ));
+    }
+    for (i, b) in scene.bindings.iter().enumerate() {
+        validate_binding(b, scene).map_err(|(what, e)| (format!("bindings[{i}]{what}"), e))?;
+    }
+    Ok(())
+}
+
+/// Checks one binding against `scene`: its own rules, then that its path names a number of
+/// the scene and `to` lies in that number's range.
+fn validate_binding(b: &Binding, scene: &Scene) -> Result<(), (&'static str, BindingError)> {
+    b.check()?;
+    let r = ParamPath::parse(&b.param)
+        .and_then(|p| p.resolve(scene))
+        .map_err(|e| (".param", BindingError::Param(e)))?;
+    let (lo, hi) = b.to;
+    if !(r.range.contains(lo) && r.range.contains(hi)) {
+        return Err((
+            ".to",
+            BindingError::To {
+                param: b.param.clone(),
+                lo,
+                hi,
+                range: r.range.describe(),
+            },
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a scene's paths; the error names where (`paths[1].keys[0].fov`).
+pub fn validate_paths(scene: &Scene) -> Result<(), (String, FlightError)> {
+    if scene.paths.len() > MAX_PATHS {
+        return Err((
+            "paths".into(),
+            FlightError::TooManyPaths {
+                count: scene.paths.len(),
+            },
+        ));
+    }
+    for (i, p) in scene.paths.iter().enumerate() {
+        let at = |what: &str| format!("paths[{i}]{what}");
+        if p.name.trim().is_empty() {
+            return Err((at(".name"), FlightError::NoName));
+        }
+        if scene.paths[..i].iter().any(|q| q.name == p.name) {
+            return Err((
+                at(".name"),
+                FlightError::Duplicate {
+                    name: p.name.clone(),
+                },
+            ));
+        }
+        p.validate(scene)
+            .map_err(|(what, e)| (format!("paths[{i}]{what}"), e))?;
+    }
+    Ok(())
+}
+
+impl FlightPath {
+    /// Checks the path against `scene` (its parameter paths must exist there). The error's
+    /// first part says where inside the path (`.keys[2].fov`).
+    pub fn validate(&self, scene: &Scene) -> Result<(), (String, FlightError)> {
+        let name = self.name.clone();
+        let n = self.keys.len();
+        if n < 2 {
+            return Err((".keys".into(), FlightError::TooFewKeys { name, count: n }));
+        }
+        if n > MAX_KEYS {
+            return Err((".keys".into(), FlightError::TooManyKeys { name, count: n }));
+        }
+        let d = self.duration;
+        if !(d.is_finite() && d > 0.0 && d <= MAX_DURATION) {
+            return Err((".duration".into(), FlightError::Duration { value: d }));
+        }
+        let (a, b) = (self.ease_in, self.ease_out);
+        if !(a.is_finite() && b.is_finite() && a >= 0.0 && b >= 0.0 && a + b <= d) {
+            return Err((
+                ".ease_in".into(),
+                FlightError::Ease {
+                    ease_in: a,
+                    ease_out: b,
+                    duration: d,
+                },
+            ));
+        }
+        let mut after = 0.0;
+        for (k, key) in self.keys.iter().enumerate() {
+            let at = |what: &str| format!(".keys[{k}]{what}");
+            key.camera()
+                .validate()
+                .map_err(|e| (at(""), FlightError::Camera(e)))?;
+            if let Some(t) = key.time {
+                if k == 0 || k + 1 == n {
+                    return Err((at(".time"), FlightError::PinnedEnd { value: t }));
+                }
+                if !(t.is_finite() && t > after && t < d) {
+                    return Err((
+                        at(".time"),
+                        FlightError::TimeOrder {
+                            value: t,
+                            after,
+                            before: d,
+                        },
+                    ));
+                }
+                after = t;
+            }
+            if let Some(s) = key.scale
+                && !(s.is_finite() && s > 0.0)
+            {
+                return Err((at(".scale"), FlightError::Scale { value: s }));
+            }
+            if key.params.len() > MAX_KEY_PARAMS {
+                return Err((
+                    at(".params"),
+                    FlightError::TooManyParams {
+                        count: key.params.len(),
+                    },
+                ));
+            }
+            for (path, &value) in &key.params {
+                let r = ParamPath::parse(path)
+                    .and_then(|p| p.resolve(scene))
+                    .map_err(|e| (at(".params"), FlightError::Param(e)))?;
+                if !r.range.contains(value) {
+                    return Err((
+                        at(".params"),
+                        FlightError::ParamRange {
+                            path: path.clone(),
+                            value,
+                            range: r.range.describe(),
+                        },
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
 }

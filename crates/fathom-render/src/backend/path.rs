@@ -9,9 +9,9 @@
 //! and material id, and the mean distance evaluations per path as its steps; fog is part of
 //! the path tracer's light transport, so the session's post effects do not apply it again.
 
+use crate::backend::{Counters, Rendered};
 use crate::control::Control;
 use crate::request::{PathRequest, RenderRequest};
-use crate::session::{Counters, Rendered};
 use crate::stats::{PathStats, Stats, Timings};
 use fathom_core::frame::{Frame, NO_ID};
 use fathom_core::{Camera, Scene, Tape};
