@@ -40,7 +40,7 @@ pub use family::{
 };
 pub use files::{atomic_file, cleanup, input_file};
 pub use model::{camera, presets, scene, scene_file, scenes, validate};
-pub use number::{dd, dd4, real, value, vec3};
+pub use number::{dd, dd4, real, rng, value, vec3};
 pub use program::{eval, reference, shared, tape};
 
 pub use camera::{Camera, CameraFrame, Projection};

@@ -25,24 +25,9 @@ pub fn fresh_renderer() -> Renderer {
     Renderer::new(gpu).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// SplitMix64: deterministic and dependency-free.
-#[allow(dead_code)] // not every test binary draws random numbers
-pub struct Rng(pub u64);
-
-#[allow(dead_code)]
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
+/// The seeded generator the tests draw parameters and points from.
+#[allow(unused_imports)] // not every test binary draws random numbers
+pub use fathom_core::rng::SplitMix64 as Rng;
 
 /// Largest per-channel difference of the 8-bit sRGB output that counts as "the same colour".
 #[allow(dead_code)]

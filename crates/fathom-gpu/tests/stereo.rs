@@ -8,8 +8,7 @@ use common::{COLOUR_TOL, compare, renderer};
 use fathom_core::Scene;
 use fathom_core::frame::Frame;
 use fathom_core::primitives::Primitive;
-use fathom_core::scene::{Call, DomainOp, Node, Shape};
-use fathom_core::transforms::Transform;
+use fathom_core::scene::{Call, Node, Shape};
 use fathom_gpu::{Projection, RenderOptions};
 use fathom_trace::post::to_rgb8;
 
@@ -66,33 +65,10 @@ fn side_by_side_views_differ_by_the_expected_parallax() {
     assert!((left - (w as f64 / 2.0 + want / 2.0)).abs() < 0.05 * want + 0.5);
 }
 
-/// A ring (torus around the camera) over a floor: every direction sees geometry.
-fn panorama() -> Scene {
-    let mut floor = Node::new(Call {
-        kind: Shape::Primitive(Primitive::Plane),
-        params: vec![0.0, 1.0, 0.0],
-    });
-    floor.ops.push(Call {
-        kind: DomainOp::Transform(Transform::Translate),
-        params: vec![0.0, -1.0, 0.0],
-    });
-    let mut scene = Scene::new(
-        Node::new(Call {
-            kind: Shape::Primitive(Primitive::Torus),
-            params: vec![3.0, 0.6],
-        })
-        .child(floor),
-    );
-    scene.camera.eye = glam::DVec3::new(0.0, 0.0, 0.0);
-    scene.camera.target = glam::DVec3::new(0.3, 0.0, -1.0);
-    scene.render.max_distance = 50.0;
-    scene
-}
-
 #[test]
 fn ods_frame_wraps_around_without_a_seam() {
     let mut r = renderer();
-    let scene = panorama();
+    let scene = fathom_core::scenes::ring_over_floor();
     let (w, h) = (256u32, 128u32);
     let o = RenderOptions {
         width: w,

@@ -13,7 +13,7 @@ use crate::cell::Cell;
 use crate::error::{MicroError, check_range};
 use crate::grid::Grid;
 use crate::limits;
-use crate::rng::Rng;
+use fathom_core::rng::SplitMix64 as Rng;
 use glam::{DMat3, DVec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 

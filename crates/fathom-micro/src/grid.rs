@@ -127,7 +127,7 @@ impl Grid {
         samples: usize,
     ) -> GridError {
         let mut ev = Evaluator::<f64>::new();
-        let mut rng = crate::rng::Rng(0x005e_ed0f_9e1d);
+        let mut rng = fathom_core::rng::SplitMix64(0x005e_ed0f_9e1d);
         let mut e = GridError {
             samples,
             ..Default::default()

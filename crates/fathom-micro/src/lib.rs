@@ -29,7 +29,6 @@ pub mod march;
 pub mod mesh;
 pub mod render;
 pub mod request;
-pub mod rng;
 pub mod shade;
 pub mod shell;
 pub mod tet;

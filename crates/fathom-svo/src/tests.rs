@@ -725,7 +725,6 @@ fn a_still_step_that_fills_the_memory_budget_ends_there_and_counts_each_refusal_
         "{} refusals for {max} nodes",
         st.no_memory
     );
-    assert!(st.subdivide_ms < 1500.0, "spent {} ms", st.subdivide_ms);
     check(&ex.tree).unwrap();
 }
 

@@ -89,32 +89,9 @@ fn ods_eyes_see_a_point_ahead_with_the_disparity_of_the_viewing_circle() {
     assert!(left > w as f64 / 2.0 && right < w as f64 / 2.0);
 }
 
-/// A ring (torus around the camera) over a floor: every direction sees geometry.
-fn panorama() -> Scene {
-    let mut floor = Node::new(Call {
-        kind: Shape::Primitive(Primitive::Plane),
-        params: vec![0.0, 1.0, 0.0],
-    });
-    floor.ops.push(Call {
-        kind: DomainOp::Transform(Transform::Translate),
-        params: vec![0.0, -1.0, 0.0],
-    });
-    let mut scene = Scene::new(
-        Node::new(Call {
-            kind: Shape::Primitive(Primitive::Torus),
-            params: vec![3.0, 0.6],
-        })
-        .child(floor),
-    );
-    scene.camera.eye = glam::DVec3::new(0.0, 0.0, 0.0);
-    scene.camera.target = glam::DVec3::new(0.3, 0.0, -1.0);
-    scene.render.max_distance = 50.0;
-    scene
-}
-
 #[test]
 fn ods_seams_match_the_left_and_right_edges_continue_each_other() {
-    let scene = panorama();
+    let scene = fathom_core::scenes::ring_over_floor();
     let (w, h) = (256u32, 128u32);
     let f = draw(
         &scene,
@@ -224,7 +201,7 @@ fn side_by_side_equals_mono_renders_from_the_shifted_eyes() {
 
 #[test]
 fn bad_stereo_options_are_refused_before_rendering() {
-    let scene = panorama();
+    let scene = fathom_core::scenes::ring_over_floor();
     for sep in [-1.0, f64::NAN, f64::INFINITY] {
         let o = Options {
             width: 8,

@@ -166,7 +166,7 @@ mod tests {
                 ours.iter().filter(|&&b| b).count(),
                 gold.iter().filter(|&&b| b).count()
             );
-            // Not yet matched (measured 0.78, 0.64, 0.43 on 2026-12-01; see docs/files.md).
+            // Not yet matched (their IoU: docs/files.md).
             if !["mandelbulb002", "menger-orbit-trap", "benchmark"].contains(&name.as_str()) {
                 worst = worst.min(iou);
             }

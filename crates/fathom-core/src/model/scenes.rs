@@ -1,5 +1,6 @@
 //! Code-built scenes for the zoom presets, benchmarks and tests of every crate: the Menger
-//! sponge spanning exactly `[-1, 1]^3`, the Mandelbox and a sphere. (The scene-file presets are
+//! sponge spanning exactly `[-1, 1]^3`, the Mandelbox, a sphere and a panorama (a ring over a
+//! floor around the camera). (The scene-file presets are
 //! in [`crate::presets`].)
 
 use crate::combine::Combine;
@@ -22,6 +23,21 @@ pub fn menger(iterations: u32) -> Scene {
     let mut s = Scene::new(root);
     s.camera.eye = DVec3::new(2.6, 2.0, 3.2);
     s.camera.target = DVec3::ZERO;
+    s
+}
+
+/// A ring (a torus of radii 3 and 0.6 around the camera at the origin) over a floor one unit
+/// below: every direction of a panorama sees geometry (the omni-directional stereo tests).
+pub fn ring_over_floor() -> Scene {
+    let floor = Node::new(Call::new(Primitive::Plane).with("normal", &[0.0, 1.0, 0.0]))
+        .op(Call::new(Transform::Translate).with("offset", &[0.0, -1.0, 0.0]));
+    let ring = Call::new(Primitive::Torus)
+        .with("major", &[3.0])
+        .with("minor", &[0.6]);
+    let mut s = Scene::new(Node::new(ring).child(floor));
+    s.camera.eye = DVec3::ZERO;
+    s.camera.target = DVec3::new(0.3, 0.0, -1.0);
+    s.render.max_distance = 50.0;
     s
 }
 

@@ -65,7 +65,7 @@ fn shell_coordinates_and_the_lipschitz_factor_hold() {
         },
     };
     let s = Shell::build(&m, 0.05, &t).unwrap();
-    let mut rng = crate::rng::Rng(5);
+    let mut rng = fathom_core::rng::SplitMix64(5);
     let mut tightest: f64 = 0.0;
     for tet in s.tets.iter().step_by(37) {
         // Vertices map to their own shell coordinates; h is 0 below and 1 on top.
@@ -76,7 +76,7 @@ fn shell_coordinates_and_the_lipschitz_factor_hold() {
         }
         // |q(p1) - q(p2)| <= L |p1 - p2| for points inside, and L is not wildly loose.
         let scene = |p: DVec3| t.scene_point(tet.shell_at(&tet.bary(p)), 0.0, 0.0);
-        let inside = |rng: &mut crate::rng::Rng| {
+        let inside = |rng: &mut fathom_core::rng::SplitMix64| {
             let w: [f64; 4] = std::array::from_fn(|_| rng.unit() + 1e-3);
             let sum: f64 = w.iter().sum();
             (0..4).map(|k| tet.verts[k] * (w[k] / sum)).sum::<DVec3>()
