@@ -239,6 +239,17 @@ pub fn reduce(frame: &Frame, f: u32) -> Frame {
     out
 }
 
+/// `left` and `right` side by side on black, `gap` pixels apart (a comparison image).
+pub fn side_by_side(left: &Frame, right: &Frame, gap: u32) -> Frame {
+    let mut f = Frame::new(
+        left.width + gap + right.width,
+        left.height.max(right.height),
+    );
+    f.paste(left, 0, 0);
+    f.paste(right, left.width + gap, 0);
+    f
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -17,10 +17,12 @@ use fathom_core::Camera;
 use fathom_core::Scene;
 use fathom_core::Tape;
 use fathom_core::camera_path::{
-    CameraPath, ExactCube, PathPreset, surface_point, target_tail, view_target,
+    CameraPath, ExactCube, PATH_PRESETS, PathPreset, path_preset, surface_point, target_tail,
+    view_target,
 };
 use fathom_core::dd::to_dvec3;
 use fathom_core::frame::Frame;
+use fathom_core::presets::{self, PresetError};
 use fathom_svo::stats::Summary;
 use fathom_svo::{DeepEye, FrameStats, Traversal};
 use glam::DVec3;
@@ -168,6 +170,9 @@ pub enum ZoomError {
     /// The frame callback failed (writing a frame, say).
     #[error("{0}")]
     Output(String),
+    /// No path preset or scene preset has this name.
+    #[error("{0} (or a path preset: {paths})", paths = PATH_PRESETS.join(", "))]
+    Preset(PresetError),
 }
 
 /// What a zoom flies: a scene, a camera path over it and, when the scene has one, its exact
@@ -216,6 +221,28 @@ pub enum Aim {
 }
 
 impl ZoomPath {
+    /// The zoom a preset names: a path preset ([`PATH_PRESETS`]) as it is, or from its first
+    /// camera toward `aim`; any scene preset from its camera toward `aim` (the view's centre
+    /// when `None`). `frames` and `depth` place a path preset's first camera.
+    pub fn from_preset(
+        name: &str,
+        aim: Option<Aim>,
+        frames: usize,
+        depth: f64,
+    ) -> Result<ZoomPath, ZoomError> {
+        if PATH_PRESETS.contains(&name) {
+            let pp = path_preset(name).map_err(ZoomError::Preset)?;
+            let Some(aim) = aim else {
+                return Ok(pp.into());
+            };
+            let view = pp.camera(0, frames.max(1), depth.max(1.0));
+            return ZoomPath::aim(name, pp.scene, &view, aim, pp.cube);
+        }
+        let scene = presets::load(name).map_err(ZoomError::Preset)?;
+        let view = scene.camera.clone();
+        ZoomPath::aim(name, scene, &view, aim.unwrap_or(Aim::View), None)
+    }
+
     /// A zoom from `view`'s eye into the surface of `scene` where `aim`'s ray first reaches it
     /// (bracketed to f64 precision, the outside point: [`surface_point`], with its
     /// double-double tail from [`target_tail`]); the camera then

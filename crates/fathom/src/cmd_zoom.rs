@@ -4,8 +4,8 @@
 
 use crate::args::{parse_bytes, parse_size, parse_vec};
 use clap::{Args, ValueEnum};
-use fathom_core::camera_path::{PATH_PRESETS, path_preset};
-use fathom_core::{presets, scene_file};
+
+use fathom_core::scene_file;
 use fathom_render::zoom::{Aim, Zoom, ZoomPath, ZoomReport};
 use fathom_render::{OctreeSettings, RenderRequest};
 use fathom_svo::Traversal;
@@ -218,31 +218,22 @@ pub fn zoom_path(a: &ZoomArgs) -> Result<ZoomPath, String> {
         }),
         (None, None) => None,
     };
-    let (name, scene, view, cube) = match (&a.scene, a.preset.as_deref()) {
-        (Some(path), _) => {
+    match &a.scene {
+        Some(path) => {
             let scene = scene_file::load(path).map_err(|e| e.to_string())?;
             scene.validate().map_err(|e| e.to_string())?;
             let view = scene.camera.clone();
-            (path.display().to_string(), scene, view, None)
+            let name = path.display().to_string();
+            ZoomPath::aim(&name, scene, &view, aim.unwrap_or(Aim::View), None)
         }
-        (None, p) => {
-            let name = p.unwrap_or("menger");
-            if PATH_PRESETS.contains(&name) {
-                let pp = path_preset(name).map_err(|e| e.to_string())?;
-                let Some(aim) = aim else {
-                    return Ok(pp.into());
-                };
-                let view = pp.camera(0, a.frames.max(1), a.depth.max(1.0));
-                return ZoomPath::aim(name, pp.scene, &view, aim, pp.cube)
-                    .map_err(|e| e.to_string());
-            }
-            let scene = presets::load(name)
-                .map_err(|e| format!("{e} (or a path preset: {})", PATH_PRESETS.join(", ")))?;
-            let view = scene.camera.clone();
-            (name.to_string(), scene, view, None)
-        }
-    };
-    ZoomPath::aim(&name, scene, &view, aim.unwrap_or(Aim::View), cube).map_err(|e| e.to_string())
+        None => ZoomPath::from_preset(
+            a.preset.as_deref().unwrap_or("menger"),
+            aim,
+            a.frames,
+            a.depth,
+        ),
+    }
+    .map_err(|e| e.to_string())
 }
 
 /// The zoom these flags describe, checked.
@@ -310,7 +301,7 @@ pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
             }
             if let (Some(dir), Some((octree, traced))) = (&a.compare_images, zf.compared) {
                 write(
-                    &side_by_side(octree, traced),
+                    &fathom_image::compare::side_by_side(octree, traced, COMPARE_GAP),
                     &dir.join(format!("compare_{i:05}.png")),
                 )?;
             }
@@ -331,20 +322,6 @@ pub fn run_zoom(a: &ZoomArgs, quiet: bool) -> Result<ZoomReport, String> {
 
 /// Gap in pixels between the two images of a comparison.
 const COMPARE_GAP: u32 = 4;
-
-/// `left` and `right` side by side on black, `COMPARE_GAP` pixels apart (a comparison image).
-fn side_by_side(
-    left: &fathom_core::frame::Frame,
-    right: &fathom_core::frame::Frame,
-) -> fathom_core::frame::Frame {
-    let mut f = fathom_core::frame::Frame::new(
-        left.width + COMPARE_GAP + right.width,
-        left.height.max(right.height),
-    );
-    f.paste(left, 0, 0);
-    f.paste(right, left.width + COMPARE_GAP, 0);
-    f
-}
 
 /// `fathom zoom` on this machine (`--shard` is dispatched by [`crate::zoom`] before this).
 pub fn run(a: ZoomArgs) -> Result<(), String> {
@@ -607,7 +584,10 @@ mod tests {
             m > 0.99 && m <= 1.0 + 1e-12,
             "{t} is not on the sponge's outer faces"
         );
-        let eye = path_preset("menger").unwrap().camera(0, 3, 1e3).eye;
+        let eye = fathom_core::camera_path::path_preset("menger")
+            .unwrap()
+            .camera(0, 3, 1e3)
+            .eye;
         assert!(
             eye.normalize().dot(t.normalize()) > 1.0 - 1e-12,
             "{t} is off the ray"
