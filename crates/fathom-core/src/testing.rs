@@ -16,6 +16,7 @@ use crate::registry::{Family, ParamKind, ParamSpec};
 use crate::scene::{Call, DomainOp, Ifs, Material, Node, Scene, Shape};
 use crate::transforms::Transform;
 use proptest::prelude::*;
+use std::path::{Path, PathBuf};
 
 /// Whether generated scenes must be valid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -226,3 +227,22 @@ pub fn arb_scene(mode: Mode) -> BoxedStrategy<Scene> {
 
 /// The seeded generator tests draw numbers from, so failures reproduce from the seed.
 pub use crate::rng::SplitMix64;
+
+/// An empty scratch directory for a test: `fathom-NAME-PID` in the system's temporary
+/// directory, emptied if an earlier run left it.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("fathom-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The names of the entries of `dir`, sorted.
+pub fn file_names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}

@@ -69,7 +69,7 @@ pub fn create_exclusive(path: &Path, bytes: &[u8]) -> Result<bool, FarmError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::PathBuf;
+    use fathom_core::testing::scratch_dir;
 
     /// A writer onto a "disk" that fills up after `room` bytes.
     struct SmallDisk<'a> {
@@ -94,16 +94,9 @@ mod tests {
         }
     }
 
-    pub(crate) fn scratch(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("fathom-farm-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
     #[test]
     fn a_full_disk_leaves_no_file_under_the_final_name_nor_a_temporary_one() {
-        let dir = scratch("atomic");
+        let dir = scratch_dir("farm-atomic");
         let path = dir.join("tile-00000.png");
         let bytes = vec![7u8; 10_000];
         let e = write_with(&path, |f| {

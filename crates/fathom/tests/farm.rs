@@ -4,8 +4,9 @@
 //! damaged, rendering only those; the refusals explain themselves. The same flow on a real
 //! Slurm cluster is scripts/farm-slurm-test.sh.
 
+use fathom_core::testing::scratch_dir;
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn fathom(args: &[&str]) -> Output {
@@ -33,13 +34,6 @@ fn err(args: &[&str]) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fathom-farm-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 /// Units rendered according to the local tasks' logs.
 fn rendered(dir: &Path) -> Vec<String> {
     let mut v = Vec::new();
@@ -57,7 +51,7 @@ fn rendered(dir: &Path) -> Vec<String> {
 
 #[test]
 fn a_local_array_renders_a_still_identical_to_one_process_and_resumes_only_what_failed() {
-    let d = scratch("still");
+    let d = scratch_dir("farm-cli-still");
     let s = |p: &str| d.join(p).to_str().unwrap().to_string();
     let common = ["--preset", "menger", "--size", "160x120"];
     ok(&[
@@ -128,7 +122,7 @@ fn a_local_array_renders_a_still_identical_to_one_process_and_resumes_only_what_
 
 #[test]
 fn farm_refusals_explain_themselves() {
-    let d = scratch("refuse");
+    let d = scratch_dir("farm-cli-refuse");
     let s = |p: &str| d.join(p).to_str().unwrap().to_string();
     let job = s("job");
     let still = [
@@ -171,7 +165,7 @@ fn farm_refusals_explain_themselves() {
 
 #[test]
 fn zoom_and_path_shards_write_frames_that_assemble() {
-    let d = scratch("frames");
+    let d = scratch_dir("farm-cli-frames");
     let s = |p: &str| d.join(p).to_str().unwrap().to_string();
     for i in 0..2 {
         ok(&[

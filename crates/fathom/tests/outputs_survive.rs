@@ -3,29 +3,13 @@
 //! behind (fathom_core::atomic_file and fathom_core::cleanup, with the binary's Ctrl-C
 //! handler). Each case runs the real `fathom` binary.
 
-use std::path::{Path, PathBuf};
+use fathom_core::testing::{file_names, scratch_dir};
+use std::path::Path;
 use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 fn fathom() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fathom"))
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fathom-survive-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// The names in `dir`, sorted.
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 /// Whether a name is a temporary output or a spool file.
@@ -42,7 +26,7 @@ fn interrupt(mut cmd: Command, dir: &Path, signal: &str) -> ExitStatus {
         .spawn()
         .unwrap();
     let start = Instant::now();
-    while !names(dir).iter().any(|n| is_temporary(n)) {
+    while !file_names(dir).iter().any(|n| is_temporary(n)) {
         if let Some(s) = child.try_wait().unwrap() {
             let mut err = String::new();
             use std::io::Read;
@@ -85,13 +69,16 @@ fn assert_intact(dir: &Path, files: &[&str], old: &[Vec<u8>], what: &str) {
             "{what}: {f} changed"
         );
     }
-    let left: Vec<String> = names(dir).into_iter().filter(|n| is_temporary(n)).collect();
+    let left: Vec<String> = file_names(dir)
+        .into_iter()
+        .filter(|n| is_temporary(n))
+        .collect();
     assert!(left.is_empty(), "{what}: left behind {left:?}");
 }
 
 #[test]
 fn an_interrupted_render_keeps_its_image_and_stats() {
-    let dir = scratch("render");
+    let dir = scratch_dir("survive-render");
     let files = ["out.png", "stats.json"];
     let old = old_files(&dir, &files);
     let mut cmd = fathom();
@@ -118,7 +105,7 @@ fn an_interrupted_render_keeps_its_image_and_stats() {
 #[test]
 fn an_interrupted_mesh_keeps_its_output_and_removes_its_spools() {
     for (signal, ext) in [("-INT", "ply"), ("-TERM", "glb")] {
-        let dir = scratch(&format!("mesh-{ext}"));
+        let dir = scratch_dir(&format!("survive-mesh-{ext}"));
         let out = format!("m.{ext}");
         let files = [out.as_str()];
         let old = old_files(&dir, &files);
@@ -144,7 +131,7 @@ fn an_interrupted_mesh_keeps_its_output_and_removes_its_spools() {
 
 #[test]
 fn an_interrupted_volume_keeps_its_image() {
-    let dir = scratch("volume");
+    let dir = scratch_dir("survive-volume");
     let files = ["v.png"];
     let old = old_files(&dir, &files);
     let mut cmd = fathom();
@@ -198,7 +185,7 @@ fn refused(dir: &Path, files: &[&str], args: &[&str], says: &str) {
 
 #[test]
 fn refused_and_failed_commands_keep_existing_outputs() {
-    let dir = scratch("refused");
+    let dir = scratch_dir("survive-refused");
     std::fs::write(dir.join("empty.obj"), "# nothing\n").unwrap();
     let mut nan = b"VOL\x03\x01\0\0\0\x01\0\0\0\x01\0\0\0\x01\0\0\0\x01\0\0\0".to_vec();
     for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, f32::NAN] {
@@ -307,7 +294,7 @@ fn refused_and_failed_commands_keep_existing_outputs() {
 
 #[test]
 fn outputs_are_checked_before_the_work() {
-    let dir = scratch("checked");
+    let dir = scratch_dir("survive-checked");
     let t = Instant::now();
     // A zoom's stats into a missing directory fails before any frame.
     let out = fathom()

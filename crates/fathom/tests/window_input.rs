@@ -4,9 +4,10 @@
 //! drag or a widget stealing a click. Each test starts its own X server and stops it by PID;
 //! a missing Xvfb, xdotool or ImageMagick fails the test (scripts/setup.sh installs them).
 
+use fathom_core::testing::scratch_dir;
 use fathom_xdrive::{Display, Window, now_ms};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 /// One window at a time: the machine has two cores, and a window renders on both.
@@ -14,13 +15,6 @@ static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn fathom() -> &'static Path {
     Path::new(env!("CARGO_BIN_EXE_fathom"))
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fathom-input-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 /// The places (where widgets were drawn) in the newest line that has them.
@@ -127,7 +121,7 @@ fn line_after(w: &mut Window, what: &str, t: f64, ok: impl Fn(&Value) -> bool) -
 fn a_drag_turns_the_camera_and_the_window_keeps_drawing_and_reading_keys() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let display = Display::start(1280, 800).unwrap();
-    let dir = scratch("drag");
+    let dir = scratch_dir("input-drag");
     let mut w = launch(
         &display,
         &dir,
@@ -178,7 +172,7 @@ fn a_drag_turns_the_camera_and_the_window_keeps_drawing_and_reading_keys() {
 fn a_click_on_the_surface_orbits_it_and_a_drag_moves_around_the_pivot() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let display = Display::start(1280, 800).unwrap();
-    let dir = scratch("orbit");
+    let dir = scratch_dir("input-orbit");
     let mut w = launch(
         &display,
         &dir,
@@ -218,7 +212,7 @@ fn a_click_on_the_surface_orbits_it_and_a_drag_moves_around_the_pivot() {
 fn clicking_each_row_of_the_tree_selects_its_node() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let display = Display::start(1280, 800).unwrap();
-    let dir = scratch("rows");
+    let dir = scratch_dir("input-rows");
     let mut w = launch(
         &display,
         &dir,
@@ -255,7 +249,7 @@ fn clicking_each_row_of_the_tree_selects_its_node() {
 fn a_slider_drag_steps_sensibly_undoes_resets_and_quitting_asks_about_the_edit() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let display = Display::start(1280, 800).unwrap();
-    let dir = scratch("slider");
+    let dir = scratch_dir("input-slider");
     let mut w = launch(
         &display,
         &dir,
@@ -389,7 +383,7 @@ fn iou(a: &[bool], b: &[bool]) -> f64 {
 #[test]
 fn f12_writes_what_the_viewport_shows_with_the_lfo_s_value() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let dir = scratch("f12");
+    let dir = scratch_dir("input-f12");
     // A white sphere of radius 0.5 on black whose LFO holds it at about 1.4 (a sine at
     // its crest, a period of 1000 s): an F12 of the document would show a far smaller disc.
     let scene = r#"Scene(

@@ -7,8 +7,8 @@
 //! rendering to a file. A missing xvfb-run fails the tests (scripts/setup.sh installs it).
 
 use fathom_core::presets;
+use fathom_core::testing::scratch_dir;
 use fathom_render::{RenderRequest, Session};
-use std::path::PathBuf;
 use std::process::Command;
 
 /// Tolerance: the window's camera is the preset's camera rebuilt from a rotation (its up and
@@ -33,18 +33,11 @@ fn require_xvfb_run() {
     );
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fathom-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 #[test]
 fn the_window_runs_under_xvfb_and_its_screenshot_is_the_scene() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     require_xvfb_run();
-    let dir = scratch("window-smoke");
+    let dir = scratch_dir("window-smoke");
     let shot = dir.join("shot.png");
     let log = dir.join("frames.jsonl");
     let runtime = dir.join("xdg");
@@ -129,7 +122,7 @@ fn the_window_runs_under_xvfb_and_its_screenshot_is_the_scene() {
 fn fathom_without_arguments_opens_the_window_when_a_display_is_present() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     require_xvfb_run();
-    let dir = scratch("no-args-window");
+    let dir = scratch_dir("no-args-window");
     // `timeout` (coreutils) stops fathom after 10 s, inside xvfb-run, which then stops Xvfb.
     // A window still open then exits 124; had no window opened, fathom would have rendered
     // fathom.png and exited 0 within a second or two.
@@ -155,7 +148,7 @@ fn fathom_without_arguments_opens_the_window_when_a_display_is_present() {
 fn the_real_window_listens_on_its_osc_port_and_logs_what_arrives() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     require_xvfb_run();
-    let dir = scratch("window-osc");
+    let dir = scratch_dir("window-osc");
     let mut scene = presets::load("sierpinski").unwrap();
     use fathom_core::binding::{Binding, OscInput, Source};
     scene.bindings.push(Binding {

@@ -160,27 +160,12 @@ pub fn write(path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), WriteError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::{file_names, scratch_dir};
     use std::time::{Duration, Instant};
-
-    fn scratch(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("fathom-atomic-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    fn names(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    }
 
     #[test]
     fn a_file_appears_whole_or_not_at_all() {
-        let dir = scratch("whole");
+        let dir = scratch_dir("atomic-whole");
         let path = dir.join("out.png");
         write(&path, b"old").unwrap();
         // Unfinished: dropped (an error on the way) leaves the old file and no temporary.
@@ -191,13 +176,13 @@ mod tests {
         ));
         drop(f);
         assert_eq!(std::fs::read(&path).unwrap(), b"old");
-        assert_eq!(names(&dir), ["out.png"]);
+        assert_eq!(file_names(&dir), ["out.png"]);
         // Finished: replaces it.
         let mut f = AtomicFile::create(&path).unwrap();
         f.write_all(b"new").unwrap();
         f.commit().unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"new");
-        assert_eq!(names(&dir), ["out.png"]);
+        assert_eq!(file_names(&dir), ["out.png"]);
         // Bad paths fail at creation, naming what is wrong.
         let e = AtomicFile::create(&dir.join("no/such/dir/x.png")).unwrap_err();
         assert!(e.to_string().contains("does not exist"), "{e}");
@@ -231,7 +216,7 @@ mod tests {
 
     #[test]
     fn a_killed_writer_leaves_the_old_file_intact() {
-        let dir = scratch("killed");
+        let dir = scratch_dir("atomic-killed");
         let path = dir.join("out.bin");
         let old: Vec<u8> = (0..100_000u32).map(|i| (i * 7 % 251) as u8).collect();
         write(&path, &old).unwrap();
@@ -273,7 +258,7 @@ mod tests {
             "the old file is byte-identical"
         );
         // SIGKILL leaves the hidden temporary (nothing can remove it); never the final name.
-        let left = names(&dir);
+        let left = file_names(&dir);
         assert!(
             left.iter().all(|n| n == "out.bin" || is_temp_name(n)),
             "{left:?}"
