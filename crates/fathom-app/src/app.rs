@@ -34,6 +34,7 @@ use std::time::{Duration, Instant};
 /// How the window was asked to start.
 #[derive(Clone, Debug)]
 pub struct ExploreOptions {
+    /// The scene to open.
     pub scene: Scene,
     /// The scene file it came from (watched for changes), if any.
     pub path: Option<PathBuf>,
@@ -76,20 +77,30 @@ impl ExploreOptions {
 /// The stereo layout shown in the viewport.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stereo {
+    /// One view.
     Mono,
+    /// Two views side by side, left eye on the left.
     SideBySide,
+    /// Omni-directional stereo, left eye on top.
     Ods,
 }
 
 /// The renderer's settings in the window.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ViewSettings {
+    /// The renderer.
     pub backend: Backend,
+    /// The CPU tracer's step rule.
     pub tracer: TracerRule,
+    /// Whether the cone-marching depth prepass runs.
     pub prepass: bool,
+    /// Screen-space ambient occlusion strength, [0, 4] (0: off).
     pub ssao: f32,
+    /// The stereo layout.
     pub stereo: Stereo,
+    /// Distance between the eyes (or the ODS circle's diameter), scene units.
     pub eye_separation: f64,
+    /// Pixels an octree voxel may project to, [0.25, 16].
     pub fidelity: f64,
     /// Octree leaves wider than a pixel drawn as surfaces instead of cubes (slower).
     pub planes: bool,
@@ -183,6 +194,7 @@ struct ShotDialog {
 
 /// The explorer window's state.
 pub struct ExplorerApp {
+    /// The scene being explored, as edited.
     pub scene: Scene,
     /// Bumps with every change of the scene the worker renders (document edits and live
     /// changes alike).
@@ -202,14 +214,18 @@ pub struct ExplorerApp {
     /// Pointer presses so far (a gesture's identity).
     presses: u64,
     edit_label: String,
+    /// The camera and its mode.
     pub camera: CameraController,
+    /// The renderer's settings.
     pub settings: ViewSettings,
+    /// The viewport's image and its dynamic render scale.
     pub viewport: Viewport,
     worker: Worker,
     /// The window's GPU (when it has one), to give a replacement worker a renderer.
     render_state: Option<egui_wgpu::RenderState>,
     /// Workers started to replace one that stopped.
     pub worker_restarts: u64,
+    /// The node selected in the tree.
     pub selected: NodePath,
     notes: Vec<Note>,
     browser: FileBrowser,
@@ -223,6 +239,7 @@ pub struct ExplorerApp {
     ui_ms: f64,
     /// The edit whose first frame is awaited, and when it was made; the last measured latency.
     pending_edit: Option<(u64, Instant)>,
+    /// From the last measured edit to its first frame on screen, ms.
     pub edit_latency_ms: Option<f64>,
     /// Recompilations the worker had done when the last frame came back.
     pub compiles: u64,

@@ -30,8 +30,9 @@ use std::time::{Duration, Instant};
 /// What to measure.
 #[derive(Clone, Debug)]
 pub struct BenchConfig {
-    /// Viewport size in pixels.
+    /// Viewport width, pixels.
     pub width: u32,
+    /// Viewport height, pixels.
     pub height: u32,
     /// Frame time the dynamic scale holds while moving, ms.
     pub target_ms: f64,
@@ -46,9 +47,13 @@ pub struct BenchConfig {
 /// Summary of a list of numbers.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
+    /// Finite values summarised.
     pub n: usize,
+    /// The median.
     pub p50: f64,
+    /// The 90th percentile.
     pub p90: f64,
+    /// The largest value.
     pub max: f64,
 }
 
@@ -123,17 +128,25 @@ pub struct Edits {
 /// One scene on one renderer.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchRow {
+    /// The scene's name.
     pub scene: String,
+    /// The renderer's name.
     pub renderer: &'static str,
-    /// The GPU adapter (for the GPU renderer), and whether it is a software one (lavapipe:
-    /// its times are CPU times).
+    /// The GPU adapter (for the GPU renderer); a software one (lavapipe) gives CPU times.
     pub adapter: Option<String>,
+    /// Whether that adapter is a software one.
     pub adapter_is_software: Option<bool>,
+    /// Viewport width, pixels.
     pub width: u32,
+    /// Viewport height, pixels.
     pub height: u32,
+    /// Frame time the dynamic scale held, ms.
     pub target_ms: f64,
+    /// The moving camera's figures.
     pub moving: Moving,
+    /// The still view's figures after the camera stopped.
     pub stop: Stop,
+    /// The parameter edits' figures, when edits were timed.
     pub edits: Option<Edits>,
     /// The renderers' notes on the frames (a fallback to the CPU, say), each once.
     pub notes: Vec<String>,
@@ -143,9 +156,13 @@ pub struct BenchRow {
 /// settle it (no leaf asking for subdivision), with a given still-view budget.
 #[derive(Clone, Debug, Serialize)]
 pub struct OctreeSettle {
+    /// The scene's name.
     pub scene: String,
+    /// Viewport width, pixels.
     pub width: u32,
+    /// Viewport height, pixels.
     pub height: u32,
+    /// Target frame time, ms.
     pub target_ms: f64,
     /// The still view's subdivision per step, in target frame times (0: the moving view's
     /// budget, which holds the target frame time).

@@ -18,9 +18,11 @@ use glam::{DQuat, DVec2, DVec3};
 /// What the input asked for in one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Controls {
-    /// Throttle along the view direction, right and up, each in [-1, 1].
+    /// Throttle along the view direction, [-1, 1].
     pub forward: f64,
+    /// Throttle to the right, [-1, 1].
     pub right: f64,
+    /// Throttle up, [-1, 1].
     pub up: f64,
     /// Roll rate in [-1, 1] (positive turns the view clockwise).
     pub roll: f64,
@@ -51,7 +53,10 @@ pub enum Mode {
     /// Mouse look turns the camera in place.
     Fly,
     /// Mouse drags turn the camera around the pivot; the wheel moves towards it.
-    Orbit { pivot: DVec3 },
+    Orbit {
+        /// The point orbited, world units.
+        pivot: DVec3,
+    },
 }
 
 /// Radians per point of mouse movement.
@@ -64,11 +69,13 @@ pub const FLY_RATE: f64 = 1.0;
 /// The camera and its mode.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraController {
+    /// Where the camera is, world units.
     pub eye: DVec3,
     /// Rotation from camera space (looking down -Z, up +Y) to the world.
     pub rotation: DQuat,
     /// Vertical field of view, degrees.
     pub fov: f64,
+    /// Fly or orbit.
     pub mode: Mode,
     /// Distance to the point looked at.
     pub look_distance: f64,
@@ -93,14 +100,17 @@ impl CameraController {
         }
     }
 
+    /// The unit view direction.
     pub fn forward(&self) -> DVec3 {
         self.rotation * DVec3::NEG_Z
     }
 
+    /// The unit up direction of the view.
     pub fn up(&self) -> DVec3 {
         self.rotation * DVec3::Y
     }
 
+    /// The unit right direction of the view.
     pub fn right(&self) -> DVec3 {
         self.rotation * DVec3::X
     }

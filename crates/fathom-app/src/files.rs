@@ -10,12 +10,15 @@ use std::time::{Instant, SystemTime};
 /// What the browser is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BrowseFor {
+    /// Choosing a scene file to open.
     Open,
+    /// Choosing where to save the scene.
     Save,
 }
 
 /// The file browser window.
 pub struct FileBrowser {
+    /// What the browser is open for; `None` when it is closed.
     pub purpose: Option<BrowseFor>,
     dir: PathBuf,
     name: String,
@@ -153,6 +156,7 @@ impl FileBrowser {
 
 /// Watches one file's modification time.
 pub struct Watch {
+    /// The file watched.
     pub path: PathBuf,
     mtime: Option<SystemTime>,
     checked: Instant,

@@ -14,6 +14,32 @@
 //! - [`history`]: undo and redo; [`files`]: open, save, watch; [`shot`]: screenshots;
 //! - [`script`]: `--frames`, `--screenshot`, `--log`;
 //! - [`bench`]: the explorer's numbers without a window (`fathom bench explore`).
+//!
+//! A first use: open the window on a preset (needs a display; `fathom explore` does this).
+//!
+//! ```no_run
+//! let scene = fathom_core::presets::load("mandelbulb")?;
+//! let mut options = fathom_app::ExploreOptions::new(scene, "mandelbulb");
+//! options.target_ms = 16.0;
+//! fathom_app::run(options)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! The pieces below the window run without one; the camera controller, for instance, turns a
+//! scene's camera into the state the controls move and back:
+//!
+//! ```
+//! use fathom_app::camera::CameraController;
+//!
+//! let scene = fathom_core::presets::load("mandelbulb")?;
+//! let controller = CameraController::new(&scene.camera);
+//! let camera = controller.camera();
+//! assert_eq!(camera.eye, scene.camera.eye);
+//! assert!((controller.forward().length() - 1.0).abs() < 1e-12);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![warn(missing_docs)]
 
 pub mod app;
 pub mod bench;

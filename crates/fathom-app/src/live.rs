@@ -31,6 +31,7 @@ pub fn start_modulator(
 /// One bound parameter's figures for the frame log.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct BoundValue {
+    /// The parameter path.
     pub param: String,
     /// The source's level in [0, 1] (`None`: an OSC binding that has received nothing).
     pub level: Option<f64>,
@@ -40,10 +41,12 @@ pub struct BoundValue {
 
 /// The window's live layer: the modulator, its clock and the timeline.
 pub struct Live {
+    /// The bindings' runtime (LFOs, OSC, smoothing).
     pub modulator: Modulator,
     clock: Instant,
     /// What the last [`Live::derive`] did.
     pub applied: Applied,
+    /// The flight-path timeline.
     pub timeline: Timeline,
     /// The last error from taking the document's bindings (shown once).
     rebind_error: Option<String>,
@@ -55,6 +58,7 @@ pub struct Timeline {
     pub path: usize,
     /// Seconds from the path's start.
     pub t: f64,
+    /// Whether the time advances with the clock.
     pub playing: bool,
     /// Whether the path drives the view (after play or a scrub, until "Leave path").
     pub engaged: bool,
@@ -65,6 +69,7 @@ pub struct Timeline {
 }
 
 impl Live {
+    /// A live layer over `modulator`, its clock started, no path engaged.
     pub fn new(modulator: Modulator) -> Live {
         Live {
             modulator,

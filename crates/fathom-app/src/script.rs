@@ -19,8 +19,11 @@ use std::path::{Path, PathBuf};
 /// width, height).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Place {
+    /// `tree`, `param` or `button`.
     pub kind: &'static str,
+    /// A node path, a parameter (`Torus.minor`) or a button's text.
     pub name: String,
+    /// x, y, width and height in window pixels.
     pub rect: [f32; 4],
 }
 
@@ -52,6 +55,7 @@ pub fn take_places(ctx: &egui::Context) -> Vec<Place> {
 /// One line of the frame log.
 #[derive(Serialize)]
 pub struct FrameLog<'a> {
+    /// The window frame's number.
     pub frame: u64,
     /// Wall-clock time of the line, ms since the Unix epoch (to put X events and frames on
     /// one time line).
@@ -62,8 +66,9 @@ pub struct FrameLog<'a> {
     pub dirty: bool,
     /// The dialog open over the window, if any (`unsaved changes`, `screenshot`, ...).
     pub dialog: Option<&'a str>,
-    /// The selected node's path (`root.children[0]`) and label.
+    /// The selected node's path (`root.children[0]`).
     pub selected: String,
+    /// The selected node's label in the tree.
     pub selected_label: String,
     /// The selected node's shape parameters, by name.
     pub selected_params: Vec<(&'static str, Vec<f64>)>,
@@ -71,20 +76,24 @@ pub struct FrameLog<'a> {
     pub undo: Option<&'a str>,
     /// The status bar's message.
     pub status: Option<&'a str>,
-    /// The view key of the frame on screen and of the view asked for now: they differ while
+    /// The view key of the frame on screen; it differs from `view` while
     /// the screen lags the camera (a drag's latency is until they first differ from before).
     pub shown_view: Option<u64>,
+    /// The view key asked for now.
     pub view: u64,
     /// The resolution scale of the frame on screen (1: full resolution).
     pub shown_scale: Option<f64>,
-    /// The camera mode: `fly` or `orbit`, and the orbit's pivot.
+    /// The camera mode: `fly` or `orbit`.
     pub mode: &'static str,
+    /// The orbit's pivot, in orbit mode.
     pub pivot: Option<[f64; 3]>,
     /// Whether the renderer runs on a software adapter (the GPU tracer on lavapipe).
     pub software_adapter: bool,
     /// Time since the previous window frame, ms.
     pub frame_ms: f64,
+    /// The viewport's dynamic render scale now (1: full resolution).
     pub render_scale: f64,
+    /// The renderer drawing the viewport.
     pub renderer: &'a str,
     /// The refinement stage of the frame on screen.
     pub stage: Option<Stage>,
@@ -100,6 +109,7 @@ pub struct FrameLog<'a> {
     pub edit_latency_ms: Option<f64>,
     /// Tape compilations so far (parameter edits add none).
     pub compiles: u64,
+    /// The camera now.
     pub camera: Camera,
     /// The OSC listener's counters (packets received, rejected, ...; zero without one).
     pub osc: fathom_live::OscCounters,
@@ -115,7 +125,9 @@ pub struct FrameLog<'a> {
 
 /// The scripted run's settings and log file.
 pub struct Script {
+    /// Frames to run before exiting, for a scripted run.
     pub frames: Option<u64>,
+    /// Where the view is rendered offline after the last scripted frame.
     pub screenshot: Option<PathBuf>,
     log: Option<(PathBuf, std::io::BufWriter<std::fs::File>)>,
     /// Why the run failed (a screenshot that could not be written), for the exit code.

@@ -11,6 +11,7 @@ use std::thread::JoinHandle;
 
 /// A screenshot being rendered.
 pub struct Shot {
+    /// The PNG being written.
     pub path: PathBuf,
     /// Tiles done (high 32 bits: total).
     progress: Arc<AtomicU64>,

@@ -20,15 +20,23 @@ pub type NodePath = Vec<usize>;
 /// A structural edit of the tree.
 #[derive(Clone, Debug, PartialEq)]
 pub enum TreeAction {
+    /// Selects the node.
     Select(NodePath),
+    /// Adds a sphere as the node's last child, and selects it.
     AddChild(NodePath),
+    /// Inserts a copy of the node (and its subtree) after it, and selects the copy.
     Duplicate(NodePath),
+    /// Removes the node and its subtree (not the root).
     Remove(NodePath),
+    /// Swaps the node with its previous sibling.
     MoveUp(NodePath),
+    /// Swaps the node with its next sibling.
     MoveDown(NodePath),
     /// Makes `node` the last child of `parent`.
     Reparent {
+        /// The node moved.
         node: NodePath,
+        /// Its new parent.
         parent: NodePath,
     },
 }

@@ -64,10 +64,13 @@ struct InFlight {
 
 /// The frame on screen.
 pub struct Shown {
+    /// The view it is of ([`view_key`]).
     pub key: u64,
+    /// Its refinement stage.
     pub stage: Stage,
     /// Its pixel size and the request it was rendered with.
     pub request: RenderRequest,
+    /// What it cost.
     pub stats: Stats,
     /// The scene generation it shows.
     pub generation: u64,
@@ -81,6 +84,7 @@ pub struct Shown {
 
 /// Frame scheduling and the texture on screen.
 pub struct Viewport {
+    /// The dynamic resolution scale that holds the target frame time.
     pub scale: RenderScale,
     /// Supersampling of the last refinement (1: stop at full resolution).
     pub refine_supersample: u32,
@@ -88,11 +92,14 @@ pub struct Viewport {
     /// view's budget, a frame rate held while nothing moves).
     pub octree_still_budget: f64,
     in_flight: Option<InFlight>,
+    /// The frame on screen, if any.
     pub shown: Option<Shown>,
+    /// The frame on screen as an egui texture.
     pub texture: Option<egui::TextureHandle>,
     next_id: u64,
-    /// When the key last changed, and when the first full-resolution frame of that key arrived.
+    /// When the view key last changed (the view has held still since).
     pub still_since: Option<Instant>,
+    /// From the view holding still to its first full-resolution frame, ms.
     pub full_after_still_ms: Option<f64>,
     /// The last error a frame reported.
     pub error: Option<String>,
@@ -119,6 +126,7 @@ pub fn view_key(camera: &Camera, generation: u64, request: &RenderRequest) -> u6
 }
 
 impl Viewport {
+    /// A viewport holding `target_ms` per frame while moving, nothing on screen yet.
     pub fn new(target_ms: f64) -> Viewport {
         Viewport {
             scale: RenderScale::new(target_ms),

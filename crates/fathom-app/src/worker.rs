@@ -33,12 +33,17 @@ pub enum Stage {
 /// One frame to render.
 #[derive(Clone)]
 pub struct FrameJob {
+    /// The job's number, to match its reply.
     pub id: u64,
+    /// The refinement stage it renders.
     pub stage: Stage,
     /// The view this frame is of (camera, scene, settings, size), to tell stale frames.
     pub key: u64,
+    /// The camera to render from.
     pub camera: Camera,
+    /// What to render (size, backend, settings).
     pub request: RenderRequest,
+    /// Set to abandon the frame when the view has moved on.
     pub cancel: CancelToken,
     /// Step the octree (render, then subdivide within its time budget) instead of settling it.
     pub octree_step: bool,
@@ -51,17 +56,23 @@ pub struct FrameJob {
 
 /// What the worker sends back for a job.
 pub struct FrameDone {
+    /// The job's number.
     pub id: u64,
+    /// The job's refinement stage.
     pub stage: Stage,
+    /// The job's view key.
     pub key: u64,
     /// The scene generation the frame shows.
     pub generation: u64,
+    /// The request it was rendered with.
     pub request: RenderRequest,
+    /// The picture, or why there is none.
     pub result: Result<Picture, FrameFailure>,
     /// Wall time of the render, conversion included.
     pub ms: f64,
     /// The job's resolution scale.
     pub scale: f64,
+    /// The session's counters after the frame (compiles, parameter updates, ...).
     pub counters: Counters,
     /// Subdivisions the octree still asked for (stepped octree frames), so the window keeps
     /// stepping a still view until it has settled.
@@ -72,19 +83,24 @@ pub struct FrameDone {
 pub struct Picture {
     /// 8-bit sRGB RGBA, ready to upload.
     pub image: egui::ColorImage,
+    /// What the frame cost.
     pub stats: Stats,
 }
 
 /// Why a job produced no picture.
 #[derive(Debug)]
 pub enum FrameFailure {
+    /// The job was cancelled before it finished.
     Cancelled,
+    /// The render failed (the error, as text).
     Error(String),
 }
 
 /// Scene edits the worker applied (or refused), reported once each.
 pub struct SceneApplied {
+    /// The scene generation of the edit.
     pub generation: u64,
+    /// What the session had to do for it, or why it was refused.
     pub result: Result<SceneChange, String>,
     /// When the window sent the edit, to measure its latency to the screen.
     pub sent: Instant,
@@ -92,7 +108,9 @@ pub struct SceneApplied {
 
 /// From the worker.
 pub enum Reply {
+    /// A job finished.
     Frame(Box<FrameDone>),
+    /// A scene edit was applied or refused.
     Scene(SceneApplied),
     /// The worker stopped (it panicked, or its thread is gone) and renders nothing more; the
     /// frame it was rendering never comes back. Carries what is known of why.

@@ -8,9 +8,13 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Rect {
+    /// The first column.
     pub x: u32,
+    /// The first row.
     pub y: u32,
+    /// Columns.
     pub width: u32,
+    /// Rows.
     pub height: u32,
 }
 
@@ -107,7 +111,9 @@ pub const NO_ID: u32 = u32::MAX;
 /// A rendered image with its G-buffer, row-major, pixel (0, 0) at the top left.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
+    /// Columns, pixels.
     pub width: u32,
+    /// Rows, pixels.
     pub height: u32,
     /// Linear RGB, not yet tonemapped.
     pub colour: Vec<[f32; 3]>,

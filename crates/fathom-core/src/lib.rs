@@ -20,6 +20,26 @@
 //! - [`atomic_file`]: every output written under a temporary name and renamed once whole;
 //!   [`cleanup`]: temporary files removed on every exit path, Ctrl-C included;
 //!   [`input_file`]: inputs read only when regular files under a size limit.
+//!
+//! A first use: read a scene from its text, compile it to a [`Tape`] and ask for the distance
+//! from a point to the surface.
+//!
+//! ```
+//! use fathom_core::{Evaluator, Tape, V3, presets, scene_file};
+//!
+//! let text = "Scene(version: 1, root: Node(shape: Sphere(radius: 1.0)))";
+//! let scene = scene_file::parse(text, "<doc>")?;
+//! let tape = Tape::compile(&scene)?;
+//! let d = Evaluator::<f64>::new().distance(&tape, V3::new(3.0, 0.0, 0.0));
+//! assert!((d - 2.0).abs() < 1e-9);
+//!
+//! // The built-in presets are scenes too.
+//! let bulb = Tape::compile(&presets::load("mandelbulb")?)?;
+//! assert!(bulb.eval_f64([0.0, 0.0, 10.0]).d > 0.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![warn(missing_docs)]
 
 pub mod animation;
 pub mod family;

@@ -15,13 +15,18 @@ use std::path::{Path, PathBuf};
 pub enum Assembled {
     /// The stitched still was written to this path.
     Still {
+        /// The PNG written.
         path: PathBuf,
+        /// Its width, pixels.
         width: u32,
+        /// Its height, pixels.
         height: u32,
     },
     /// The verified frames, in order, and the ffmpeg input pattern that names them.
     Frames {
+        /// The frame files, in order.
         files: Vec<PathBuf>,
+        /// The ffmpeg input pattern that names them (the frame prefix and `%06d.png`).
         pattern: PathBuf,
     },
 }

@@ -15,6 +15,33 @@
 //! - [`assemble`]: verify every unit, stitch tiles into the final PNG;
 //! - [`local`]: a local array of `fathom farm work` processes (no scheduler);
 //! - [`slurm`]: the `sbatch` array script, submission and waiting.
+//!
+//! A first use: cut a still into tiles and see which of them each task of a three-task array
+//! renders. Every unit belongs to exactly one shard, whatever the engine that runs them.
+//!
+//! ```
+//! use fathom_farm::{Part, Shard, Work};
+//!
+//! let output = (1920, 1080);
+//! let work = Work::tiles(6, output.0, output.1)?;
+//! let units = work.units(output);
+//! assert_eq!(units.len(), 6);
+//! assert!(matches!(units[0].part, Part::Tile(r) if r.x == 0 && r.y == 0));
+//!
+//! let mut owned = Vec::new();
+//! for i in 0..3 {
+//!     owned.extend(Shard::new(i, 3)?.units(units.len()));
+//! }
+//! owned.sort();
+//! assert_eq!(owned, (0..6).collect::<Vec<_>>());
+//! # Ok::<(), fathom_farm::FarmError>(())
+//! ```
+//!
+//! The `fathom farm` command drives the rest: it creates the job directory
+//! ([`FarmDir::create`]), runs a shard ([`run_shard`] with the units rendered by
+//! [`render`]) and assembles the outputs ([`assemble`]).
+
+#![warn(missing_docs)]
 
 pub mod assemble;
 pub mod atomic;

@@ -11,9 +11,11 @@ use std::time::Instant;
 /// One task of a local array.
 #[derive(Clone, Debug, Serialize)]
 pub struct LocalTask {
+    /// The task's shard, `I/N`.
     pub shard: String,
     /// Wall time from spawn to exit, ms.
     pub ms: f64,
+    /// Whether it exited with success.
     pub ok: bool,
     /// The task's report (`farm work --json`), when it printed one.
     pub report: Option<serde_json::Value>,
@@ -24,10 +26,13 @@ pub struct LocalTask {
 /// What a local array did.
 #[derive(Clone, Debug, Serialize)]
 pub struct LocalRun {
+    /// Shards in the array.
     pub tasks: usize,
+    /// Most tasks run at once.
     pub parallel: usize,
     /// Wall time of the whole array, ms.
     pub ms: f64,
+    /// Each task, in shard order.
     pub results: Vec<LocalTask>,
 }
 

@@ -35,11 +35,13 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Fingerprint {
+    /// The version of fathom that wrote the job.
     pub fathom_version: String,
     /// SHA-256 of the scene text (`scene.ron`).
     pub scene_sha256: String,
     /// The request, without threads (any count renders the same pixels) and region.
     pub request: RenderRequest,
+    /// The kind of job and its size.
     pub work: Work,
 }
 
@@ -131,11 +133,15 @@ fn earlier_id(
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Manifest {
+    /// The manifest format version ([`FORMAT`]).
     pub format: u32,
+    /// The job id ([`Fingerprint::id`]).
     pub job: String,
+    /// Everything the outputs depend on.
     pub fingerprint: Fingerprint,
     /// Size of the output image (both eyes for stereo).
     pub output: (u32, u32),
+    /// Every unit of the job, in index order.
     pub units: Vec<Unit>,
 }
 
@@ -143,17 +149,24 @@ pub struct Manifest {
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Receipt {
+    /// The id of the job the unit belongs to.
     pub job: String,
+    /// The unit's index.
     pub unit: usize,
+    /// The unit's file name in the job directory.
     pub file: String,
+    /// The file's size, bytes.
     pub size: u64,
+    /// The SHA-256 of the file, hex.
     pub sha256: String,
 }
 
 /// A unit's state on disk.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum UnitState {
+    /// Its file matches this receipt.
     Done(Receipt),
+    /// Its file is not there (a receipt without its file counts as missing).
     Missing,
     /// Present but not trustworthy (why).
     Corrupt(String),
@@ -162,15 +175,20 @@ pub enum UnitState {
 /// What `farm status` reports.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Status {
+    /// The job id.
     pub job: String,
+    /// Units in the job.
     pub units: usize,
+    /// The units done.
     pub done: Vec<usize>,
+    /// The units not yet rendered.
     pub missing: Vec<usize>,
     /// Unit and why.
     pub corrupt: Vec<(usize, String)>,
 }
 
 impl Status {
+    /// Whether every unit is done.
     pub fn complete(&self) -> bool {
         self.done.len() == self.units
     }
@@ -179,7 +197,9 @@ impl Status {
 /// An open job directory.
 #[derive(Clone, Debug)]
 pub struct FarmDir {
+    /// The job directory.
     pub dir: PathBuf,
+    /// Its manifest.
     pub manifest: Manifest,
 }
 

@@ -21,15 +21,20 @@ pub trait UnitRenderer {
 pub enum Event<'a> {
     /// Already done by an earlier run.
     Skipped(&'a Unit),
-    /// Rendering starts (after `redo`: why the old file was not trusted).
+    /// Rendering starts.
     Started {
+        /// The unit.
         unit: &'a Unit,
+        /// Why the old file was not trusted, when there was one.
         redo: Option<&'a str>,
     },
     /// Rendered and committed.
     Rendered {
+        /// The unit.
         unit: &'a Unit,
+        /// Its receipt, as committed.
         receipt: &'a Receipt,
+        /// Wall time of render, encode and commit, ms.
         ms: f64,
     },
 }
@@ -37,11 +42,15 @@ pub enum Event<'a> {
 /// What a shard did (`fathom farm work` prints it as JSON).
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct ShardReport {
+    /// The job id.
     pub job: String,
+    /// The shard, `I/N`.
     pub shard: String,
     /// Units this shard owns.
     pub owned: usize,
+    /// Units rendered by this run.
     pub rendered: Vec<usize>,
+    /// Units already done by an earlier run.
     pub skipped: Vec<usize>,
     /// Units found corrupt and rendered again, with why.
     pub redone: Vec<(usize, String)>,

@@ -19,7 +19,9 @@ pub const MAX_SHARDS: usize = 1_000_000;
 /// Task `index` of `count`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Shard {
+    /// This task's index, in `0..count`.
     pub index: usize,
+    /// Tasks in the array, [1, [`MAX_SHARDS`]].
     pub count: usize,
 }
 

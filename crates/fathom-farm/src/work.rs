@@ -14,15 +14,28 @@ pub const MAX_UNITS: usize = 1_000_000;
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Work {
     /// A still cut into `cols` x `rows` tiles (regions of the output image), row by row.
-    Tiles { cols: u32, rows: u32 },
+    Tiles {
+        /// Tiles per row.
+        cols: u32,
+        /// Tiles per column.
+        rows: u32,
+    },
     /// `frames` frames of the scene's flight path `path` (as `fathom render --path`).
-    Path { path: String, frames: usize },
+    Path {
+        /// The flight path's name.
+        path: String,
+        /// Frames over the path.
+        frames: usize,
+    },
     /// `frames` frames of the camera-path preset `preset` zooming by `depth` (as
     /// `fathom zoom`), each rendered as a settled still so it does not depend on the frames
     /// before it.
     Zoom {
+        /// The camera-path preset's name.
         preset: String,
+        /// Zoom factor from the first to the last frame, >= 1.
         depth: f64,
+        /// Frames of the zoom.
         frames: usize,
     },
 }
@@ -40,9 +53,11 @@ pub enum Part {
 /// One unit of work.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Unit {
+    /// The unit's index in the job, from 0.
     pub index: usize,
     /// File name in the job directory.
     pub file: String,
+    /// What it renders.
     pub part: Part,
 }
 

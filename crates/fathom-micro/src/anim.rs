@@ -10,7 +10,9 @@ use fathom_core::scene::{Call, Material, Node, Scene};
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[error("the keyframes differ in structure at {path}: {what}")]
 pub struct KeyframeError {
+    /// Where in the tree they differ (a node path).
     pub path: String,
+    /// How they differ.
     pub what: String,
 }
 
@@ -18,8 +20,11 @@ pub struct KeyframeError {
 /// `period` (seconds).
 #[derive(Clone, Debug)]
 pub struct Animation {
+    /// The keyframe at phase 0.
     pub from: Scene,
+    /// The keyframe at phase 1.
     pub to: Scene,
+    /// Seconds from `from` to `to` and back.
     pub period: f64,
 }
 

@@ -6,7 +6,9 @@ use glam::DVec3;
 /// A box of texture-scene space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cell {
+    /// The lowest corner.
     pub min: DVec3,
+    /// The highest corner.
     pub max: DVec3,
 }
 
@@ -17,6 +19,7 @@ impl Cell {
         max: DVec3::splat(1.0),
     };
 
+    /// The box's extent along each axis.
     pub fn size(&self) -> DVec3 {
         self.max - self.min
     }

@@ -20,15 +20,20 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 /// One affine map `p -> linear p + offset`, chosen with `probability`.
 #[derive(Clone, Debug)]
 pub struct Map {
+    /// The linear part.
     pub linear: DMat3,
+    /// The translation.
     pub offset: DVec3,
+    /// How often the chaos game picks this map (the maps' probabilities sum to 1).
     pub probability: f64,
 }
 
 /// An iterated function system for the chaos game.
 #[derive(Clone, Debug)]
 pub struct Ifs {
+    /// The name `--texture cloud:NAME` takes.
     pub name: &'static str,
+    /// The affine maps.
     pub maps: Vec<Map>,
     /// Applied to every output point (a lean or a twist of the whole attractor).
     pub shear: DMat3,
@@ -196,7 +201,9 @@ pub fn fit_to_cell(points: &mut [DVec3], cell: Cell) {
 /// The distance field of a point cloud: spheres of `radius` around every point.
 pub struct Cloud {
     tree: ImmutableKdTree<f32, 3>,
+    /// Points in the cloud.
     pub points: usize,
+    /// Radius of the sphere around each point, texture-scene units.
     pub radius: f64,
     coarse: Grid,
     /// Below this coarse bound the k-d tree is asked.

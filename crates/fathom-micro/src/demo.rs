@@ -11,15 +11,23 @@ use glam::DVec3;
 
 /// A demo's ingredients.
 pub struct Demo {
+    /// The name `--demo` takes.
     pub name: &'static str,
+    /// The base mesh.
     pub mesh: TriangleMesh,
+    /// What cleaning the mesh found.
     pub mesh_report: MeshReport,
+    /// The texture scene.
     pub texture: Scene,
+    /// Where the texture came from, for messages.
     pub texture_origin: String,
+    /// Height of the shell over the mesh, mesh units.
     pub shell_height: f64,
+    /// How the texture tiles the mesh's UVs.
     pub tiling: Tiling,
     /// Direction from the object's centre to the camera.
     pub view_from: DVec3,
+    /// The base mesh's material.
     pub base: Material,
 }
 

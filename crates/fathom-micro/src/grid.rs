@@ -12,7 +12,9 @@ use rayon::prelude::*;
 /// A sampled distance field over a box, with the nearest sample's material id.
 #[derive(Clone, Debug)]
 pub struct Grid {
+    /// Samples per axis.
     pub n: u32,
+    /// The box sampled.
     pub cell: Cell,
     step: DVec3,
     dist: Vec<f32>,
@@ -22,13 +24,16 @@ pub struct Grid {
 /// The baked grid's error against the exact field at random points of its box.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GridError {
+    /// Random points measured.
     pub samples: usize,
-    /// Mean and largest absolute error over all samples.
+    /// Mean absolute error over all samples.
     pub mean_abs: f64,
+    /// Largest absolute error over all samples.
     pub max_abs: f64,
     /// Mean absolute error over samples within two grid spacings of the surface (where it
     /// decides what is drawn).
     pub near_surface_mean_abs: f64,
+    /// Samples within two grid spacings of the surface.
     pub near_surface_samples: usize,
 }
 

@@ -14,6 +14,29 @@
 //! - [`gpu`]: the rasterising renderer on wgpu, marching in the fragment shader with
 //!   fathom-gpu's WGSL tape interpreter;
 //! - [`demo`]: the two shipped demos.
+//!
+//! A first use: the teapot demo (a sponge texture over the built-in teapot) prepared
+//! from a [`request::Request`] and rendered small on the CPU.
+//!
+//! ```
+//! use fathom_micro::request::{Prepared, Request};
+//!
+//! let request = Request {
+//!     demo: Some("teapot".into()),
+//!     width: 32,
+//!     height: 24,
+//!     ..Request::new()
+//! };
+//! let Prepared::Shell { scene, options, .. } = request.prepare()? else {
+//!     unreachable!("a demo has a mesh")
+//! };
+//! let (frame, stats) = fathom_micro::render(&scene, &options, &|_, _| {})?;
+//! assert_eq!((frame.width, frame.height), (32, 24));
+//! assert!(stats.hits > 0);
+//! # Ok::<(), fathom_micro::MicroError>(())
+//! ```
+
+#![warn(missing_docs)]
 
 pub mod alone;
 pub mod anim;

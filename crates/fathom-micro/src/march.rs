@@ -37,7 +37,12 @@ pub struct MarchParams {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum HitKind {
     /// The texture, in tile (`cu`, `cv`).
-    Texture { cu: f64, cv: f64 },
+    Texture {
+        /// The hit's position across the tile, along u.
+        cu: f64,
+        /// The hit's position across the tile, along v.
+        cv: f64,
+    },
     /// The base mesh (the prism's bottom face).
     Base,
 }
@@ -45,8 +50,11 @@ pub enum HitKind {
 /// A hit: distance, tetrahedron, kind.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
+    /// Distance along the ray.
     pub t: f64,
+    /// The tetrahedron the hit is in.
     pub tet: u32,
+    /// Texture or base mesh.
     pub kind: HitKind,
 }
 
@@ -110,15 +118,20 @@ pub fn march_span(
 /// Scratch space of one thread.
 #[derive(Default)]
 pub struct Scratch {
+    /// The texture's evaluator.
     pub ev: Evaluator<f64>,
+    /// The ray's spans through the shell, each with its tetrahedron.
     pub spans: Vec<(Span, u32)>,
 }
 
 /// The outcome of one ray.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RayResult {
+    /// What the ray hit, if anything.
     pub hit: Option<Hit>,
+    /// Texture distance evaluations.
     pub steps: u32,
+    /// Tetrahedra whose spans were marched.
     pub tets_visited: u32,
 }
 

@@ -25,15 +25,20 @@ pub const TILE: u32 = 16;
 
 /// Everything a frame is made of.
 pub struct MicroScene {
+    /// The shell of tetrahedra over the mesh.
     pub shell: Shell,
+    /// The bounding-volume hierarchy over the shell's tetrahedra.
     pub bvh: ShellBvh,
+    /// The distance-field texture pasted into the shell.
     pub texture: Texture,
+    /// Lights and sky.
     pub lighting: Lighting,
     /// The base mesh's material; `None` hides it (rays pass through the shell's floor).
     pub base: Option<Material>,
 }
 
 impl MicroScene {
+    /// A scene of these parts, with the shell's bounding-volume hierarchy built.
     pub fn new(
         shell: Shell,
         texture: Texture,
@@ -54,8 +59,11 @@ impl MicroScene {
 /// How to render.
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// The camera.
     pub camera: Camera,
     /// Distance evaluations per ray, [1, 100000].
     pub max_steps: u32,
@@ -123,18 +131,27 @@ impl RenderOptions {
 /// Counters and timings of one frame (integers summed, so independent of threads).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MicroStats {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// Triangles of the base mesh.
     pub triangles: usize,
+    /// Tetrahedra of the shell.
     pub tetrahedra: usize,
+    /// Rays that hit the texture or the base mesh.
     pub hits: u64,
+    /// Rays that hit the texture.
     pub texture_hits: u64,
+    /// Rays that hit the base mesh.
     pub base_hits: u64,
-    /// Texture distance evaluations marching rays, and shading hits.
+    /// Texture distance evaluations marching rays.
     pub de_march: u64,
+    /// Texture distance evaluations shading hits.
     pub de_shade: u64,
     /// Tetrahedra whose spans were marched.
     pub tets_visited: u64,
+    /// Wall time of the frame, milliseconds.
     pub ms_total: f64,
 }
 

@@ -22,7 +22,9 @@ pub enum TextureSpec {
     /// The demo's (or, without a demo, the default preset `menger`).
     #[default]
     Default,
+    /// A scene file.
     File(std::path::PathBuf),
+    /// A built-in preset by name.
     Preset(String),
     /// A chaos-game system by name ([`chaos::SYSTEMS`]).
     Cloud(String),
@@ -31,29 +33,49 @@ pub enum TextureSpec {
 /// Everything a run can ask for; `None` means "the default" (the demo's, or fitted).
 #[derive(Clone, Debug, Default)]
 pub struct Request {
+    /// The mesh: a file (OBJ, glTF) or a built-in mesh's name.
     pub mesh: Option<String>,
+    /// A demo by name, which supplies every default below.
     pub demo: Option<String>,
+    /// The texture.
     pub texture: TextureSpec,
     /// A second keyframe for an animated texture.
     pub texture_to: Option<std::path::PathBuf>,
+    /// Seconds into the texture animation, [-1e9, 1e9].
     pub time: f64,
+    /// Seconds from one keyframe to the other and back, [0.001, 1e9].
     pub period: f64,
+    /// Shell height, mesh units (default: the demo's, or 3% of the mesh's diagonal).
     pub shell: Option<f64>,
+    /// Texture tiles per UV unit (default: the demo's, or 1).
     pub tiles: Option<f64>,
+    /// The box of texture-scene space one tile fills (default: [-1, 1]^3).
     pub cell: Option<Cell>,
+    /// The UV projection for a mesh without UVs.
     pub uv: Option<UvProjection>,
     /// Bake the texture into an n^3 grid.
     pub bake: Option<u32>,
+    /// Points of a chaos-game cloud.
     pub cloud_points: u64,
+    /// Radius of the sphere around each cloud point, texture-scene units.
     pub cloud_radius: f64,
+    /// Seed of the chaos game.
     pub cloud_seed: u64,
+    /// Whether the base mesh is drawn under the shell.
     pub show_base: bool,
+    /// Rotate texture normals onto the interpolated vertex normals.
     pub smooth_normals: bool,
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// The camera's eye (default: fitted to the object).
     pub eye: Option<DVec3>,
+    /// The point looked at (default: fitted to the object).
     pub target: Option<DVec3>,
+    /// The camera's up direction (default: fitted).
     pub up: Option<DVec3>,
+    /// Vertical field of view, degrees (default: 40).
     pub fov: Option<f64>,
 }
 
@@ -76,17 +98,26 @@ impl Request {
 
 /// A prepared run: a shell scene, or a texture on its own (a cloud without a mesh).
 pub enum Prepared {
+    /// A texture pasted over a mesh's shell.
     Shell {
+        /// The shell, its texture and lighting.
         scene: Box<MicroScene>,
+        /// How to render it.
         options: RenderOptions,
+        /// What cleaning the mesh found.
         mesh_report: MeshReport,
         /// The texture's keyframe scene at the requested time (the GPU path uploads its tape).
         texture_scene: Option<Box<Scene>>,
     },
+    /// A texture on its own in its cell (a cloud without a mesh).
     Alone {
+        /// The texture.
         texture: Box<Texture>,
+        /// The box of texture-scene space drawn.
         cell: Cell,
+        /// Lights and sky.
         lighting: Lighting,
+        /// How to render it.
         options: RenderOptions,
     },
 }

@@ -11,8 +11,11 @@ use glam::DVec3;
 pub struct Lighting {
     /// (unit direction towards the light, colour times intensity), at most 8.
     pub lights: Vec<(DVec3, DVec3)>,
+    /// Sky colour straight up, linear RGB.
     pub sky_top: DVec3,
+    /// Sky colour at the horizon and below, linear RGB.
     pub sky_bottom: DVec3,
+    /// Ambient light level.
     pub ambient: f64,
 }
 
@@ -20,6 +23,7 @@ pub struct Lighting {
 pub const MAX_LIGHTS: usize = 8;
 
 impl Lighting {
+    /// The lights, sky and ambient level of a scene.
     pub fn from_scene(s: &Scene) -> Lighting {
         Lighting {
             lights: s

@@ -28,7 +28,9 @@ const SPLIT: [[(usize, bool); 4]; 3] = [
 /// What building a shell found.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ShellReport {
+    /// Triangles of the base mesh.
     pub triangles: usize,
+    /// Tetrahedra built (three per prism, less those skipped).
     pub tetrahedra: usize,
     /// Tetrahedra skipped because the offset turned them inside out or flat.
     pub skipped_inverted: usize,
@@ -38,20 +40,25 @@ pub struct ShellReport {
     pub interior_faces: usize,
     /// Faces claimed by more than two tetrahedra (non-manifold input).
     pub overfull_faces: usize,
-    /// Largest and median per-prism Lipschitz factor.
+    /// Largest per-prism Lipschitz factor.
     pub lipschitz_max: f64,
+    /// Median per-prism Lipschitz factor.
     pub lipschitz_median: f64,
 }
 
 /// A shell of tetrahedra over a mesh.
 #[derive(Clone, Debug)]
 pub struct Shell {
+    /// The tetrahedra, three per prism.
     pub tets: Vec<Tet>,
     /// `neighbours[t][k]`: the tetrahedron across face `k` of `t` (opposite vertex `k`), or
     /// [`NONE`].
     pub neighbours: Vec<[u32; 4]>,
+    /// Shell height, mesh units.
     pub height: f64,
+    /// How the texture tiles the mesh's UVs.
     pub tiling: Tiling,
+    /// What building the shell found.
     pub report: ShellReport,
     /// Bounding box of every shell vertex.
     pub bounds: (DVec3, DVec3),

@@ -38,9 +38,13 @@ pub struct Tet {
 /// A segment of a ray inside a tetrahedron: entry and exit distances and faces.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Span {
+    /// Distance along the ray where it enters.
     pub t_in: f64,
+    /// Distance along the ray where it leaves.
     pub t_out: f64,
+    /// The face it enters through (index of the opposite vertex), or 4 when none bounds it.
     pub face_in: u8,
+    /// The face it leaves through, or 4 when none bounds it.
     pub face_out: u8,
 }
 

@@ -36,6 +36,7 @@ impl Default for Tiling {
 }
 
 impl Tiling {
+    /// Checks the tile count and the cell's size.
     pub fn validate(&self) -> Result<(), MicroError> {
         check_range("tiles", self.tiles, 1e-6, 1e6, "[1e-6, 1e6] per UV unit")?;
         let s = self.cell.size();
@@ -77,6 +78,7 @@ pub enum Field {
 
 /// A distance-field texture with its materials.
 pub struct Texture {
+    /// Where the distances come from.
     pub field: Field,
     /// Materials by id (the tape's; one for grids without ids and clouds).
     pub materials: Vec<Material>,

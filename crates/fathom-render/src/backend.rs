@@ -39,7 +39,9 @@ pub struct Counters {
 /// A finished frame and what it cost.
 #[derive(Clone, Debug)]
 pub struct Rendered {
+    /// The image and its G-buffer.
     pub frame: Frame,
+    /// What the frame cost and found.
     pub stats: Stats,
 }
 

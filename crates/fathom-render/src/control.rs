@@ -39,13 +39,16 @@ impl CancelToken {
 /// How far a frame has got: units (tiles, or passes) done out of the total.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Progress {
+    /// Units finished.
     pub done: usize,
+    /// Units in the frame.
     pub total: usize,
 }
 
 /// The cancellation and progress hooks of one render.
 #[derive(Clone, Copy, Default)]
 pub struct Control<'a> {
+    /// Set to abandon the frame; `None` when it cannot be cancelled.
     pub cancel: Option<&'a CancelToken>,
     /// Called (from worker threads) as units finish.
     pub progress: Option<&'a (dyn Fn(Progress) + Sync)>,

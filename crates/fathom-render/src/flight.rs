@@ -22,14 +22,17 @@ pub const MAX_FRAMES: usize = 1_000_000;
 pub struct FlightRender {
     /// Frames, [1, 1e6]; the first at the path's start, the last at its end.
     pub frames: usize,
+    /// What each frame renders; each frame looks through the path's camera at its time.
     pub request: RenderRequest,
 }
 
 /// Why a path render stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum FlightRenderError {
+    /// The frame count (given) is outside [1, [`MAX_FRAMES`]].
     #[error("--frames {0} is out of range 1..={MAX_FRAMES}")]
     Frames(usize),
+    /// A frame failed to render.
     #[error(transparent)]
     Render(#[from] RenderError),
     /// The frame callback failed (writing a frame, say).
@@ -39,10 +42,13 @@ pub enum FlightRenderError {
 
 /// One finished frame, as the callback sees it.
 pub struct FlightFrame<'a> {
+    /// The frame's index, from 0.
     pub index: usize,
     /// Seconds from the path's start.
     pub time: f64,
+    /// The path's state at this frame's time.
     pub pose: &'a Pose,
+    /// The frame and its stats.
     pub rendered: &'a Rendered,
     /// What the session had to do for this frame's scene.
     pub change: SceneChange,
@@ -51,11 +57,13 @@ pub struct FlightFrame<'a> {
 /// What a path render did.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct FlightReport {
+    /// Frames rendered.
     pub frames: usize,
     /// Wall time per frame (scene update and render), ms.
     pub frame_ms: Vec<f64>,
-    /// Frames whose scene needed a parameter-buffer update, and a recompile.
+    /// Frames whose scene needed a parameter-buffer update.
     pub param_updates: usize,
+    /// Frames whose scene needed a recompile.
     pub recompiles: usize,
 }
 
@@ -70,6 +78,7 @@ pub fn frame_time(i: usize, frames: usize, duration: f64) -> f64 {
 }
 
 impl FlightRender {
+    /// Checks the frame count and the request.
     pub fn validate(&self) -> Result<(), FlightRenderError> {
         if self.frames == 0 || self.frames > MAX_FRAMES {
             return Err(FlightRenderError::Frames(self.frames));

@@ -20,6 +20,28 @@
 //! needs, bit-identical to the same pixels of the whole render (SSAO and prepass borders
 //! included); the GPU and octree backends render the whole frame and crop it (the same
 //! pixels, no time saved).
+//!
+//! A first use: a session over a preset renders a small frame with the CPU tracer (the default
+//! backend), then takes an edited scene without recompiling it.
+//!
+//! ```
+//! use fathom_render::{RenderRequest, SceneChange, Session};
+//!
+//! let scene = fathom_core::presets::load("mandelbulb")?;
+//! let camera = scene.camera.clone();
+//! let mut session = Session::new(scene.clone())?;
+//! let request = RenderRequest { width: 32, height: 24, ..RenderRequest::default() };
+//! let rendered = session.render(&camera, &request)?;
+//! assert_eq!((rendered.frame.width, rendered.frame.height), (32, 24));
+//! assert_eq!(rendered.stats.renderer, "trace");
+//!
+//! let mut brighter = scene;
+//! brighter.lights[0].intensity *= 2.0;
+//! assert_eq!(session.set_scene(brighter)?, SceneChange::Settings);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![warn(missing_docs)]
 
 mod backend;
 pub mod compare;

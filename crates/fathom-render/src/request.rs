@@ -198,8 +198,9 @@ impl Default for PathRequest {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RenderRequest {
-    /// Size of one eye's view in pixels (the output is twice as wide or tall for stereo).
+    /// One eye's view width, pixels (the output is twice as wide or tall for stereo).
     pub width: u32,
+    /// One eye's view height, pixels.
     pub height: u32,
     /// Mono, side-by-side or omni-directional stereo.
     pub projection: Projection,
@@ -257,40 +258,56 @@ pub enum RequestError {
     /// Size, projection, supersampling, SSAO or region out of range.
     #[error(transparent)]
     Options(#[from] OptionsError),
+    /// The thread count (given) is outside [1, 1024].
     #[error("threads = {0} is out of range [1, 1024]")]
     Threads(usize),
+    /// The fog density (given) is not finite or outside [0, 1e6].
     #[error("fog = {0} is out of range [0, 1e6] (density per world unit)")]
     Fog(f64),
+    /// The octree backend was asked for a stereo view.
     #[error(
         "stereo is not supported by the octree renderer (it renders one mono view); use the sphere tracer for stereo"
     )]
     OctreeStereo,
+    /// The octree backend was asked for a geometry-only frame.
     #[error("the octree renderer does not render geometry-only frames")]
     OctreeGeometryOnly,
+    /// The volume backend was asked for a stereo or geometry-only frame.
     #[error(
         "stereo and geometry-only frames are not supported by the volume renderer (it renders one mono view)"
     )]
     VolumeView,
+    /// A volume setting is out of its range.
     #[error("volume {name} = {value} is out of range {range}")]
     VolumeSetting {
+        /// The setting's name.
         name: &'static str,
+        /// The value given.
         value: f64,
+        /// The setting's range, as text.
         range: &'static str,
     },
+    /// The path backend was asked for stereo, supersampling, SSAO or a geometry-only frame.
     #[error(
         "the path tracer renders one mono view with its own antialiasing: stereo, \
          supersampling, SSAO and geometry-only frames are not supported with it (use more \
          samples per pixel instead of supersampling)"
     )]
     PathView,
+    /// A path-tracing setting is out of its range.
     #[error("path {name} = {value} is out of range {range}")]
     PathSetting {
+        /// The setting's name.
         name: &'static str,
+        /// The value given.
         value: f64,
+        /// The setting's range, as text.
         range: &'static str,
     },
+    /// The octree's settle frames (given) are above 100000.
     #[error("octree settle_frames = {0} is out of range [0, 100000]")]
     SettleFrames(usize),
+    /// The octree settings are invalid.
     #[error(transparent)]
     Octree(#[from] OctreeError),
 }

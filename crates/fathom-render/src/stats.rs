@@ -7,8 +7,11 @@ use serde::Serialize;
 /// Distance evaluations per pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct DeCounts {
+    /// In the cone-marching prepass.
     pub prepass: u64,
+    /// Marching the primary rays.
     pub trace: u64,
+    /// Shading: normals, shadows, ambient occlusion.
     pub shade: u64,
 }
 
@@ -34,9 +37,13 @@ pub struct Timings {
 pub struct OctreeStats {
     /// Frames spent subdividing at the view before it was rendered.
     pub settle_frames: usize,
+    /// Nodes in the octree.
     pub nodes: u64,
+    /// Distance bricks in the octree.
     pub bricks: u64,
+    /// Mean nodes visited per ray.
     pub nodes_per_ray: f64,
+    /// Memory the octree's arena holds, bytes.
     pub arena_bytes: u64,
 }
 
@@ -65,24 +72,31 @@ pub struct Stats {
     pub renderer: &'static str,
     /// The GPU adapter (GPU only).
     pub adapter: Option<String>,
+    /// Whether that adapter is a software rasteriser (GPU only).
     pub adapter_is_software: Option<bool>,
-    /// Size of the frame returned (the region, for a region render).
+    /// Width of the frame returned, pixels (the region's, for a region render).
     pub width: u32,
+    /// Height of the frame returned, pixels.
     pub height: u32,
     /// Whether the f64 (deep zoom) path ran.
     pub deep_f64_path: bool,
     /// Primary rays traced (samples, margins of a region included; 0 where not counted).
     pub primary_rays: u64,
+    /// Shadow rays traced (0 where not counted).
     pub shadow_rays: u64,
     /// Primary rays that hit.
     pub hits: u64,
+    /// Distance evaluations per pass.
     pub de_evaluations: DeCounts,
     /// Distance evaluations of the depth passes (prepass and primary rays) per pixel.
     pub depth_de_per_pixel: f64,
     /// Primary-ray evaluations per pixel.
     pub trace_steps_per_pixel: f64,
+    /// Wall time per pass.
     pub ms: Timings,
+    /// Octree figures (octree only).
     pub octree: Option<OctreeStats>,
+    /// Path-tracer figures (path tracer only).
     pub path: Option<PathStats>,
     /// Why the frame was drawn differently from what was asked (a GPU view too deep for f32
     /// drawn by the CPU tracer), if it was.

@@ -106,14 +106,20 @@ pub const DEFAULT_REFERENCE_SAMPLES: u32 = 2;
 /// Why a zoom was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum ZoomError {
+    /// The zoom depth (given) is not finite or below 1.
     #[error("--depth {0} must be a finite zoom factor >= 1")]
     Depth(f64),
+    /// The frame count (given) is outside [1, 10000000].
     #[error("--frames {0} is out of range 1..=10000000")]
     Frames(usize),
+    /// The warm-start time (given, ms) is not finite or outside [0, [`MAX_WARMUP_MS`]].
     #[error("--warmup-ms {0} is out of range 0..=600000")]
     Warmup(f64),
+    /// The reference samples per pixel (given) are outside
+    /// [1, [`fathom_trace::deep::MAX_PIXEL_SAMPLES`]].
     #[error("--reference-samples {0} is out of range 1..={max}", max = fathom_trace::deep::MAX_PIXEL_SAMPLES)]
     ReferenceSamples(u32),
+    /// A frame failed to render.
     #[error(transparent)]
     Render(#[from] RenderError),
     /// `--pixel` names a pixel outside the image.
@@ -121,9 +127,13 @@ pub enum ZoomError {
         "--pixel {x},{y} is outside the {width}x{height} image (x in 0..{width}, y in 0..{height})"
     )]
     PixelOutside {
+        /// The pixel's column.
         x: u32,
+        /// The pixel's row.
         y: u32,
+        /// The image's width, pixels.
         width: u32,
+        /// The image's height, pixels.
         height: u32,
     },
     /// `--toward` names the eye itself, or a point that is not finite.
@@ -131,42 +141,69 @@ pub enum ZoomError {
         "--toward {x},{y},{z} gives no direction from the eye at {eye_x},{eye_y},{eye_z} (the point must differ from the eye and be finite)"
     )]
     TowardEye {
+        /// The point's x.
         x: f64,
+        /// The point's y.
         y: f64,
+        /// The point's z.
         z: f64,
+        /// The eye's x.
         eye_x: f64,
+        /// The eye's y.
         eye_y: f64,
+        /// The eye's z.
         eye_z: f64,
     },
     /// The eye of the view is inside the surface, so no ray reaches it from outside.
     #[error("the eye at {x},{y},{z} is inside the surface of {scene}; move the camera out first")]
     EyeInside {
+        /// The scene's name.
         scene: String,
+        /// The eye's x.
         x: f64,
+        /// The eye's y.
         y: f64,
+        /// The eye's z.
         z: f64,
     },
     /// The aimed ray never reaches the surface.
     #[error(
         "nothing to zoom into: {what} misses the surface of {scene}; aim at a pixel that shows the surface (--pixel X,Y) or toward a point on it (--toward x,y,z)"
     )]
-    Miss { scene: String, what: String },
+    Miss {
+        /// The scene's name.
+        scene: String,
+        /// Which ray missed (the centre ray, a pixel's, the one toward a point).
+        what: String,
+    },
     /// The octree's root cube does not contain the zoom target: the zoom would end on sky.
     #[error(
         "the zoom target {x},{y},{z} lies outside the octree's root cube (corner {min_x},{min_y},{min_z}, side {side}); the octree fits its root to the surface inside a cube around the origin 1.5 times the target's largest coordinate (at least [-4, 4]^3), so the surface there was not found"
     )]
     OutsideRoot {
+        /// The target's x.
         x: f64,
+        /// The target's y.
         y: f64,
+        /// The target's z.
         z: f64,
+        /// The root cube's lowest x.
         min_x: f64,
+        /// The root cube's lowest y.
         min_y: f64,
+        /// The root cube's lowest z.
         min_z: f64,
+        /// The root cube's edge length.
         side: f64,
     },
     /// The scene does not compile.
     #[error("the scene {scene} does not compile: {message}")]
-    Compile { scene: String, message: String },
+    Compile {
+        /// The scene's name.
+        scene: String,
+        /// The compiler's error, as text.
+        message: String,
+    },
     /// The frame callback failed (writing a frame, say).
     #[error("{0}")]
     Output(String),
@@ -213,9 +250,13 @@ pub enum Aim {
     Toward(DVec3),
     /// The ray through the centre of this pixel of a `width` x `height` image of the view.
     Pixel {
+        /// The pixel's column, from the left.
         x: u32,
+        /// The pixel's row, from the top.
         y: u32,
+        /// The image's width, pixels.
         width: u32,
+        /// The image's height, pixels.
         height: u32,
     },
 }
@@ -441,20 +482,31 @@ pub const MAX_WARMUP_MS: f64 = 600_000.0;
 /// The JSON written by `fathom zoom --stats`.
 #[derive(Serialize)]
 pub struct ZoomReport {
+    /// The zoom's name (path preset or scene file).
     pub preset: String,
+    /// The octree traversal used.
     pub traversal: Traversal,
+    /// Frame width, pixels.
     pub width: u32,
+    /// Frame height, pixels.
     pub height: u32,
+    /// Zoom factor from the first to the last frame.
     pub depth: f64,
+    /// Worker threads.
     pub threads: usize,
+    /// Pixels a voxel may project to.
     pub fidelity: f64,
     /// Why the zoom stopped early (precision limit), if it did.
     pub stopped: Option<String>,
-    /// The warm start before the first frame: wall time and settling frames.
+    /// Wall time of the warm start before the first frame, ms.
     pub warmup_ms: f64,
+    /// Settling frames of the warm start.
     pub warmup_frames: usize,
+    /// Figures over all frames.
     pub summary: Summary,
+    /// Zoom factor per frame.
     pub zoom: Vec<f64>,
+    /// The octree's figures per frame.
     pub frames: Vec<FrameStats>,
     /// The frames compared with the sphere tracer (`compare_every`).
     pub compare: Vec<FrameComparison>,

@@ -10,6 +10,21 @@
 //! [`output`], [`post`] and [`stereo`] are [`fathom_image`]'s modules, re-exported here so
 //! the command line's many `fathom_trace::output` paths keep working; new code uses
 //! `fathom_image` directly.
+//!
+//! A first use: render a small image of a preset on the CPU.
+//!
+//! ```
+//! use fathom_trace::{Options, render};
+//!
+//! let scene = fathom_core::presets::load("mandelbulb")?;
+//! let opts = Options { width: 32, height: 24, ..Options::default() };
+//! let (frame, stats) = render(&scene, &opts, &|_done, _total| {})?;
+//! assert_eq!((frame.width, frame.height), (32, 24));
+//! assert!(stats.hits > 0, "the fractal fills the middle of the view");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![warn(missing_docs)]
 
 pub mod deep;
 pub mod prepass;

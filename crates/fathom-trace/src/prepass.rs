@@ -29,14 +29,17 @@ pub use fathom_core::shared::PREPASS_LEVELS as LEVELS;
 pub struct StartGrid {
     /// Cell size in pixels.
     pub block: u32,
-    /// Cells of the whole level per row and per column.
+    /// Cells of the whole level per row.
     pub full_w: u32,
+    /// Cells of the whole level per column.
     pub full_h: u32,
-    /// The first cell held.
+    /// The first column of cells held.
     pub x0: u32,
+    /// The first row of cells held.
     pub y0: u32,
-    /// Cells held per row and per column.
+    /// Columns of cells held.
     pub w: u32,
+    /// Rows of cells held.
     pub h: u32,
     /// Safe start distance per cell, row-major.
     pub t: Vec<f32>,
@@ -95,13 +98,19 @@ impl StartGrid {
 
 /// What the prepass needs to know about the view.
 pub struct View<'a> {
+    /// The scene's compiled program.
     pub tape: &'a Tape,
+    /// The camera's frame.
     pub cam: &'a CameraFrame,
-    /// How rays leave the camera, and which eye this view is.
+    /// How rays leave the camera.
     pub projection: Projection,
+    /// Which eye this view is: 0 left (or the only one), 1 right.
     pub eye: u32,
+    /// One eye's image width, pixels.
     pub width: u32,
+    /// One eye's image height, pixels.
     pub height: u32,
+    /// Angular size of one pixel at the image centre, radians.
     pub pixel_angle: f64,
     /// Parameters of the primary rays (t_max, steps, pixel epsilon).
     pub base: MarchParams,

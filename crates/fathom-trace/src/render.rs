@@ -55,8 +55,11 @@ pub const DEEP_FOOTPRINT: f64 = 1e-5;
 /// How to render.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
+    /// One eye's image width, pixels, [1, MAX_SIDE].
     pub width: u32,
+    /// One eye's image height, pixels, [1, MAX_SIDE].
     pub height: u32,
+    /// Basic or enhanced sphere tracing.
     pub method: Method,
     /// Run the cone-marching prepass.
     pub prepass: bool,
@@ -88,41 +91,70 @@ impl Default for Options {
 /// Why render options were refused (before anything is allocated).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum OptionsError {
+    /// The width or the height is zero.
     #[error("image size {width}x{height} is empty")]
-    Empty { width: u32, height: u32 },
+    Empty {
+        /// The width asked for, pixels.
+        width: u32,
+        /// The height asked for, pixels.
+        height: u32,
+    },
+    /// The projection's eye separation is out of range.
     #[error(transparent)]
     Projection(#[from] ProjectionError),
+    /// One eye's view is wider or taller than [`MAX_SIDE`].
     #[error("image size {width}x{height} exceeds the limit of {MAX_SIDE} pixels per side")]
-    TooLarge { width: u32, height: u32 },
+    TooLarge {
+        /// The width asked for, pixels.
+        width: u32,
+        /// The height asked for, pixels.
+        height: u32,
+    },
+    /// The stereo layout of both eyes is wider or taller than [`MAX_SIDE`].
     #[error(
         "stereo output size {out_width}x{out_height} ({width}x{height} per eye) exceeds the limit of {MAX_SIDE} pixels per side"
     )]
     StereoTooLarge {
+        /// The output width, pixels.
         out_width: u32,
+        /// The output height, pixels.
         out_height: u32,
+        /// One eye's width, pixels.
         width: u32,
+        /// One eye's height, pixels.
         height: u32,
     },
+    /// The supersampling factor (given) is outside [1, [`MAX_SUPERSAMPLE`]].
     #[error("supersample = {0} is out of range [1, {MAX_SUPERSAMPLE}]")]
     Supersample(u32),
+    /// The output with supersampling would have more than [`MAX_PIXELS`] samples.
     #[error(
         "{out_width}x{out_height} with {ss}x{ss} supersampling is {samples} samples; the limit is {MAX_PIXELS}"
     )]
     TooManySamples {
+        /// The output width, pixels.
         out_width: u32,
+        /// The output height, pixels.
         out_height: u32,
+        /// Samples per pixel along each axis.
         ss: u32,
+        /// Samples in all.
         samples: u64,
     },
+    /// The SSAO strength (given) is not finite or outside [0, 4].
     #[error("ssao = {0} is out of range [0, 4]")]
     Ssao(f32),
+    /// The region asked for is empty or not inside the output image.
     #[error(
         "region {}x{} at ({}, {}) is empty or not inside the {width}x{height} image",
         region.width, region.height, region.x, region.y
     )]
     Region {
+        /// The region asked for.
         region: Rect,
+        /// The output width, pixels.
         width: u32,
+        /// The output height, pixels.
         height: u32,
     },
 }
@@ -130,12 +162,16 @@ pub enum OptionsError {
 /// Why a render failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum TraceError {
+    /// The options break a limit.
     #[error(transparent)]
     Options(#[from] OptionsError),
+    /// The scene is invalid.
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// The camera cannot form an image.
     #[error(transparent)]
     Camera(#[from] CameraError),
+    /// The scene did not compile to a tape.
     #[error(transparent)]
     Compile(#[from] CompileError),
     /// [`Hooks::cancel`] was set before the frame was finished.
@@ -203,8 +239,9 @@ impl Options {
 /// Counters and timings of one render. Sums are integers, so they do not depend on threads.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stats {
-    /// Size of the frame returned (the region, when one was asked for).
+    /// Width of the frame returned, pixels (the region's, when one was asked for).
     pub width: u32,
+    /// Height of the frame returned, pixels.
     pub height: u32,
     /// Whether the f64 (deep zoom) path ran.
     pub deep: bool,
@@ -212,15 +249,21 @@ pub struct Stats {
     pub primary_rays: u64,
     /// Shadow rays (one per lit hit and shadowing light).
     pub shadow_rays: u64,
-    /// Distance evaluations per pass (per ray lane).
+    /// Distance evaluations of the prepass (each pass counts per ray lane).
     pub de_prepass: u64,
+    /// Distance evaluations of the marching pass.
     pub de_trace: u64,
+    /// Distance evaluations of shading (normals, shadows, AO).
     pub de_shade: u64,
     /// Primary rays that hit a surface.
     pub hits: u64,
+    /// Wall time of the prepass, milliseconds.
     pub ms_prepass: f64,
+    /// Wall time of marching and shading, milliseconds.
     pub ms_trace: f64,
+    /// Wall time of the post effects, milliseconds.
     pub ms_post: f64,
+    /// Wall time of the whole render, milliseconds.
     pub ms_total: f64,
 }
 

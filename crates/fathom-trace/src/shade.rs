@@ -17,7 +17,9 @@ pub const SHADOW_LIFT: f64 = 4.0;
 
 /// Scene-wide shading inputs, prepared once per render.
 pub struct Shading<'a> {
+    /// The scene's compiled program.
     pub tape: &'a Tape,
+    /// The scene's render settings (materials' palette, fog, AO, sky, ...).
     pub render: &'a RenderSettings,
     /// Lights with unit directions and colour premultiplied by intensity.
     pub lights: Vec<([f64; 3], [f64; 3], bool)>,
@@ -67,8 +69,11 @@ impl<'a> Shading<'a> {
 /// One shaded lane.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Shaded {
+    /// Linear RGB.
     pub colour: [f32; 3],
+    /// Unit surface normal.
     pub normal: [f32; 3],
+    /// Material id of the surface hit.
     pub id: u32,
 }
 

@@ -59,20 +59,30 @@ pub enum Source {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum SourceText {
+    /// An LFO: see [`Lfo`] for the fields.
     Lfo {
+        /// The waveform.
         wave: Wave,
+        /// Cycles per second, [0, 1000].
         rate: f64,
+        /// Offset in cycles.
         #[serde(default, skip_serializing_if = "is_zero")]
         phase: f64,
+        /// Share of the `to` range the swing covers, [0, 1]; 1 when left out.
         #[serde(default = "one")]
         depth: f64,
+        /// Seed of the noise wave.
         #[serde(default, skip_serializing_if = "is_zero_u32")]
         seed: u32,
     },
+    /// An OSC input: see [`OscInput`] for the fields.
     Osc {
+        /// OSC address pattern matched against incoming addresses.
         address: String,
+        /// Which argument carries the value, [0, 63].
         #[serde(default, skip_serializing_if = "is_zero_usize")]
         arg: usize,
+        /// The input values mapped to level 0 and 1; (0, 1) when left out.
         #[serde(default = "unit_range")]
         from: (f64, f64),
     },
@@ -121,7 +131,9 @@ impl From<Source> for SourceText {
 /// LFO waveforms. Each starts at its middle at phase 0 and rises (the noise aside).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Wave {
+    /// A sine, rising from the middle at phase 0.
     Sine,
+    /// A triangle, rising from the middle at phase 0.
     Triangle,
     /// Rises from the middle to the top, jumps to the bottom, rises again.
     Saw,
@@ -133,6 +145,7 @@ pub enum Wave {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Lfo {
+    /// The waveform.
     pub wave: Wave,
     /// Cycles per second, [0, 1000].
     pub rate: f64,
@@ -236,34 +249,74 @@ impl Binding {
 /// What is wrong with a binding. The scene's error adds where (`bindings[2].to`).
 #[derive(Clone, Debug, PartialEq, Error)]
 pub enum BindingError {
+    /// The scene has more than [`MAX_BINDINGS`] bindings.
     #[error("{count} bindings; the limit is {MAX_BINDINGS}")]
-    TooMany { count: usize },
+    TooMany {
+        /// How many bindings the scene has.
+        count: usize,
+    },
+    /// The parameter path does not parse.
     #[error("{0}")]
     Param(ParamPathError),
+    /// The `to` range is not finite or leaves the parameter's declared range.
     #[error("to = ({lo}, {hi}) must lie in `{param}`'s range {range}, with finite values")]
     To {
+        /// The parameter path.
         param: String,
+        /// The value level 0 maps to.
         lo: f64,
+        /// The value level 1 maps to.
         hi: f64,
+        /// The parameter's declared range, as text.
         range: String,
     },
+    /// The smoothing time is negative, not finite or above [`MAX_SMOOTHING`].
     #[error("smoothing = {value} s is out of range [0, {MAX_SMOOTHING}]")]
-    Smoothing { value: f64 },
+    Smoothing {
+        /// The smoothing given, seconds.
+        value: f64,
+    },
+    /// The LFO rate is negative, not finite or above [`MAX_LFO_RATE`].
     #[error("rate = {value} Hz is out of range [0, {MAX_LFO_RATE}]")]
-    Rate { value: f64 },
+    Rate {
+        /// The rate given, Hz.
+        value: f64,
+    },
+    /// The LFO depth is outside [0, 1].
     #[error("depth = {value} is out of range [0, 1]")]
-    Depth { value: f64 },
+    Depth {
+        /// The depth given.
+        value: f64,
+    },
+    /// The LFO phase is not finite.
     #[error("phase = {value} must be a finite number of cycles")]
-    Phase { value: f64 },
+    Phase {
+        /// The phase given, cycles.
+        value: f64,
+    },
+    /// The OSC address fails [`plausible_osc_address`].
     #[error(
         "address `{address}` is not an OSC address pattern: it must start with `/`, be at most \
          {MAX_OSC_ADDRESS} bytes of printable ASCII without spaces or `#`"
     )]
-    Address { address: String },
+    Address {
+        /// The address given.
+        address: String,
+    },
+    /// The OSC argument index is above [`MAX_OSC_ARG`].
     #[error("arg = {value} is out of range [0, {MAX_OSC_ARG}]")]
-    Arg { value: usize },
+    Arg {
+        /// The index given.
+        value: usize,
+    },
+    /// The OSC `from` range is not two different finite numbers.
     #[error("from = ({lo}, {hi}) must be two different finite numbers")]
-    From { lo: f64, hi: f64 },
+    From {
+        /// The input value mapped to level 0.
+        lo: f64,
+        /// The input value mapped to level 1.
+        hi: f64,
+    },
 }
 
 /// Whether `a` may be an OSC address pattern (the OSC runtime checks the pattern syntax in

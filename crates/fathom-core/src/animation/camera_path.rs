@@ -194,7 +194,9 @@ impl CameraPath {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExactCube {
+    /// The cube's centre, world units.
     pub centre: DVec3,
+    /// Half its edge length, world units.
     pub half: f64,
 }
 

@@ -449,6 +449,7 @@ pub fn path_clock(duration: f64, ease_in: f64, ease_out: f64, t: f64) -> f64 {
 /// The state of a flight at one time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pose {
+    /// The camera at this time.
     pub camera: Camera,
     /// The exact unit view direction (the camera's look-at point may be so close to the eye
     /// at a deep zoom that `target - eye` resolves the direction only to ~1e-6).
@@ -457,12 +458,14 @@ pub struct Pose {
     pub scale: f64,
     /// Values of the parameters the keys set, in the order of [`Flight::params`].
     pub params: Vec<f64>,
-    /// The segment (from key `segment` to `segment + 1`) and the spline parameter in it.
+    /// The segment the time falls in: from key `segment` to `segment + 1`.
     pub segment: usize,
+    /// The spline parameter in that segment, [0, 1].
     pub u: f64,
 }
 
 impl Flight {
+    /// The path's name.
     pub fn name(&self) -> &str {
         &self.name
     }

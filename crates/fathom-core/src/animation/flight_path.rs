@@ -64,10 +64,12 @@ pub struct FlightPath {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Keyframe {
+    /// Where the camera is, world units.
     pub eye: DVec3,
     /// A point looked at (the orientation comes from the direction; the distance is kept as
     /// the camera's focus distance).
     pub target: DVec3,
+    /// The camera's up direction (need not be orthogonal to the view); +y when left out.
     #[serde(default = "default_up")]
     pub up: DVec3,
     /// Vertical field of view, degrees (0, 179].
@@ -114,53 +116,114 @@ impl Keyframe {
 /// What is wrong with a flight path. The scene's error adds where (`paths[0].keys[2]`).
 #[derive(Clone, Debug, PartialEq, Error)]
 pub enum FlightError {
+    /// The path's name is empty.
     #[error("a flight path needs a non-empty name")]
     NoName,
+    /// Two paths of the scene share a name.
     #[error("two paths are named `{name}`; path names must be unique")]
-    Duplicate { name: String },
+    Duplicate {
+        /// The shared name.
+        name: String,
+    },
+    /// The scene has more than [`MAX_PATHS`] paths.
     #[error("{count} flight paths; the limit is {MAX_PATHS}")]
-    TooManyPaths { count: usize },
+    TooManyPaths {
+        /// How many paths the scene has.
+        count: usize,
+    },
+    /// The path has fewer than two keys.
     #[error(
         "path `{name}` has {count} keyframe(s); its spline needs at least 2 (a start and an end)"
     )]
-    TooFewKeys { name: String, count: usize },
+    TooFewKeys {
+        /// The path's name.
+        name: String,
+        /// How many keys it has.
+        count: usize,
+    },
+    /// The path has more than [`MAX_KEYS`] keys.
     #[error("path `{name}` has {count} keyframes; the limit is {MAX_KEYS}")]
-    TooManyKeys { name: String, count: usize },
+    TooManyKeys {
+        /// The path's name.
+        name: String,
+        /// How many keys it has.
+        count: usize,
+    },
+    /// The duration is not in (0, [`MAX_DURATION`]] seconds.
     #[error("duration = {value} s is out of range (0, {MAX_DURATION}]")]
-    Duration { value: f64 },
+    Duration {
+        /// The duration given, seconds.
+        value: f64,
+    },
+    /// An ease time is negative, or the two together exceed the duration.
     #[error(
         "ease_in = {ease_in} s and ease_out = {ease_out} s must be >= 0 and together at most \
          the duration ({duration} s)"
     )]
     Ease {
+        /// The ease-in time given, seconds.
         ease_in: f64,
+        /// The ease-out time given, seconds.
         ease_out: f64,
+        /// The path's duration, seconds.
         duration: f64,
     },
+    /// A key's camera is invalid.
     #[error("{0}")]
     Camera(CameraError),
+    /// The first or the last key pins a time (theirs are fixed at 0 and the duration).
     #[error(
         "time = {value}: only keys between the first and the last can be pinned (the first is \
          at 0 s, the last at the path's duration); remove `time` here"
     )]
-    PinnedEnd { value: f64 },
+    PinnedEnd {
+        /// The pinned time given, seconds.
+        value: f64,
+    },
+    /// A pinned time is not after the previous pinned key and before the path's end.
     #[error(
         "time = {value} s must lie after the previous pinned key ({after} s) and before the \
          path's end ({before} s)"
     )]
-    TimeOrder { value: f64, after: f64, before: f64 },
+    TimeOrder {
+        /// The pinned time given, seconds.
+        value: f64,
+        /// The previous pinned time (0 for the start), seconds.
+        after: f64,
+        /// The path's duration, seconds.
+        before: f64,
+    },
+    /// A key's scale is not a finite number > 0.
     #[error("scale = {value} must be a finite number > 0 (the key's distance to the surface)")]
-    Scale { value: f64 },
+    Scale {
+        /// The scale given.
+        value: f64,
+    },
+    /// A key sets more than [`MAX_KEY_PARAMS`] parameters.
     #[error("{count} parameter values; the limit per key is {MAX_KEY_PARAMS}")]
-    TooManyParams { count: usize },
+    TooManyParams {
+        /// How many parameters the key sets.
+        count: usize,
+    },
+    /// A key's parameter path does not parse or name a number of the scene.
     #[error("{0}")]
     Param(ParamPathError),
+    /// A key's parameter value is outside the parameter's declared range.
     #[error("`{path}` = {value} is out of range {range}")]
     ParamRange {
+        /// The parameter path.
         path: String,
+        /// The value given.
         value: f64,
+        /// The declared range, as text.
         range: String,
     },
+    /// A path asked for by name is not in the scene.
     #[error("no flight path is named `{name}`; {hint}")]
-    Unknown { name: String, hint: String },
+    Unknown {
+        /// The name asked for.
+        name: String,
+        /// The nearest names the scene has, or a note that it has no paths.
+        hint: String,
+    },
 }

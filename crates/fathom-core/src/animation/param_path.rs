@@ -25,15 +25,28 @@ use thiserror::Error;
 pub enum ParamPathError {
     /// The text is not a path.
     #[error("`{path}` is not a parameter path: {msg}")]
-    Syntax { path: String, msg: String },
+    Syntax {
+        /// The text given.
+        path: String,
+        /// What is wrong with it.
+        msg: String,
+    },
     /// A step names something the scene does not have.
     #[error("`{path}`: {msg}")]
-    Missing { path: String, msg: String },
+    Missing {
+        /// The path given.
+        path: String,
+        /// Which step is missing and what there is instead.
+        msg: String,
+    },
     /// The path names a vector or colour: it needs a component.
     #[error("`{path}` is a {width}-component value; name one component, e.g. `{path}.{first}`")]
     NeedsComponent {
+        /// The path given.
         path: String,
+        /// How many components the value has.
         width: usize,
+        /// The name of its first component (`x`, `r` or `0`).
         first: String,
     },
 }

@@ -50,6 +50,7 @@ enum Loc {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Resolved {
     loc: Loc,
+    /// The range the number takes: what [`Resolved::set`] clamps to.
     pub range: ParamRange,
 }
 

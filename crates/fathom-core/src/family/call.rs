@@ -15,7 +15,9 @@ use std::sync::LazyLock;
 /// A node's shape: a primitive or a fractal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Shape {
+    /// A primitive shape.
     Primitive(Primitive),
+    /// A fractal.
     Fractal(Fractal),
 }
 
@@ -49,7 +51,9 @@ impl Family for Shape {
 /// An entry of a node's operator list: a point operator or a distance modifier.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DomainOp {
+    /// A point operator (moves, folds, repeats the point before the shape sees it).
     Transform(Transform),
+    /// A distance modifier (changes the distance the shape returns).
     Modifier(Modifier),
 }
 
@@ -83,7 +87,9 @@ impl Family for DomainOp {
 /// One use of a registry entry with its parameter values (flat, in declaration order).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Call<K> {
+    /// Which entry is used.
     pub kind: K,
+    /// Its parameter values, flat, in declaration order.
     pub params: Vec<f64>,
 }
 

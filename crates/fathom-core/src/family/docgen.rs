@@ -20,6 +20,7 @@ pub struct Group {
     pub title: &'static str,
     /// Where in a scene file its entries are written.
     pub used_in: &'static str,
+    /// The table's entries.
     pub defs: &'static [Def],
 }
 

@@ -35,15 +35,22 @@ impl ParamKind {
 /// artists use: a torus tube is valid up to 1e6 but interesting below 1).
 #[derive(Clone, Copy, Debug)]
 pub struct ParamSpec {
+    /// The name used in scene files, paths and the GUI.
     pub name: &'static str,
+    /// Scalar, integer or 3-vector.
     pub kind: ParamKind,
     /// Default value; only the first `kind.width()` components are meaningful.
     pub default: [f64; 3],
+    /// The hard range's lower end, per component.
     pub min: f64,
+    /// The hard range's upper end, per component.
     pub max: f64,
-    /// The slider range, inside `[min, max]`; typed values may go to the hard range.
+    /// The slider range's lower end: the slider covers `[soft_min, soft_max]`, inside
+    /// `[min, max]`; typed values may go to the hard range.
     pub soft_min: f64,
+    /// The slider range's upper end.
     pub soft_max: f64,
+    /// One line on what the parameter does, for `fathom list`, the docs and tooltips.
     pub doc: &'static str,
 }
 
@@ -109,43 +116,75 @@ impl ParamSpec {
 /// Why a value does not fit a declared parameter.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ParamError {
+    /// The value has the wrong number of components for the parameter's kind.
     #[error("parameter `{param}` takes {expected} number(s), got {got}")]
     Width {
+        /// The parameter's name.
         param: &'static str,
+        /// Components the kind takes.
         expected: usize,
+        /// Components given.
         got: usize,
     },
+    /// A component is NaN or infinite.
     #[error("parameter `{param}` must be a finite number, got {value}")]
-    NotFinite { param: &'static str, value: f64 },
+    NotFinite {
+        /// The parameter's name.
+        param: &'static str,
+        /// The component given.
+        value: f64,
+    },
+    /// A component is outside the hard range `[min, max]`.
     #[error("parameter `{param}` = {value} is out of range [{}, {}]", fmt_num(*min), fmt_num(*max))]
     OutOfRange {
+        /// The parameter's name.
         param: &'static str,
+        /// The component given.
         value: f64,
+        /// The hard range's lower end.
         min: f64,
+        /// The hard range's upper end.
         max: f64,
     },
+    /// An integer parameter got a fractional value.
     #[error("parameter `{param}` must be a whole number, got {value}")]
-    NotWhole { param: &'static str, value: f64 },
+    NotWhole {
+        /// The parameter's name.
+        param: &'static str,
+        /// The value given.
+        value: f64,
+    },
 }
 
 /// Why a parameter list does not fit a registry entry.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum EntryError {
+    /// The list has the wrong number of values for the entry.
     #[error("`{entry}` takes {expected} parameter values, got {got}")]
     Count {
+        /// The entry's name.
         entry: &'static str,
+        /// Values the entry takes.
         expected: usize,
+        /// Values given.
         got: usize,
     },
+    /// A parameter is named that the entry does not declare.
     #[error("`{entry}` has no parameter `{name}`; it has: {}", valid.join(", "))]
     NoSuchParam {
+        /// The entry's name.
         entry: &'static str,
+        /// The name given.
         name: String,
+        /// The entry's parameter names.
         valid: Vec<&'static str>,
     },
+    /// A value does not fit its parameter.
     #[error("{entry}: {error}")]
     Param {
+        /// The entry's name.
         entry: &'static str,
+        /// What is wrong with the value.
         error: ParamError,
     },
 }
@@ -189,8 +228,11 @@ pub type BakeFn = fn(user: &[f64], out: &mut Vec<f64>);
 pub struct Def {
     /// The name used in scene files and on the command line.
     pub name: &'static str,
+    /// What the entry is, for `fathom list`, the docs and the GUI.
     pub doc: &'static str,
+    /// How far its distance can be trusted.
     pub quality: Quality,
+    /// Its parameters, in scene-file order.
     pub params: &'static [ParamSpec],
     /// When set, the user's parameters are converted (e.g. axis-angle to a matrix) before they
     /// go into the parameter buffer.

@@ -19,14 +19,24 @@ use std::sync::atomic::{AtomicU64, Ordering};
 pub enum WriteError {
     /// The directory the file would go in does not exist.
     #[error("cannot write {}: the directory {} does not exist", path.display(), dir.display())]
-    MissingDirectory { path: PathBuf, dir: PathBuf },
+    MissingDirectory {
+        /// The file that was to be written.
+        path: PathBuf,
+        /// The directory that does not exist.
+        dir: PathBuf,
+    },
     /// The path names a directory (or has no file name).
     #[error("cannot write {}: it is a directory, not a file name", path.display())]
-    NotAFileName { path: PathBuf },
+    NotAFileName {
+        /// The path given.
+        path: PathBuf,
+    },
     /// Creating, writing, syncing or renaming the file failed (no permission, disk full, ...).
     #[error("cannot write {}: {source}", path.display())]
     Io {
+        /// The file that was to be written.
         path: PathBuf,
+        /// The error from the operating system.
         #[source]
         source: std::io::Error,
     },

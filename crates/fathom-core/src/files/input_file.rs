@@ -13,16 +13,30 @@ pub enum ReadError {
     /// The file could not be opened or read.
     #[error("cannot read {}: {source}", path.display())]
     Io {
+        /// The file that was to be read.
         path: PathBuf,
+        /// The error from the operating system.
         #[source]
         source: std::io::Error,
     },
     /// Not a regular file (a directory, FIFO, socket or device): refused before opening.
     #[error("cannot read {}: it is a {kind}, not a regular file", path.display())]
-    NotAFile { path: PathBuf, kind: &'static str },
+    NotAFile {
+        /// The path given.
+        path: PathBuf,
+        /// What it is instead (`directory`, `FIFO`, ...).
+        kind: &'static str,
+    },
     /// Larger than the limit for its kind of file; not read.
     #[error("cannot read {}: it is {size} bytes; the limit is {max} bytes", path.display())]
-    TooLarge { path: PathBuf, size: u64, max: u64 },
+    TooLarge {
+        /// The file that was to be read.
+        path: PathBuf,
+        /// Its size, bytes.
+        size: u64,
+        /// The limit for its kind of file, bytes.
+        max: u64,
+    },
 }
 
 impl ReadError {

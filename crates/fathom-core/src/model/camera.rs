@@ -10,8 +10,11 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Camera {
+    /// Where the camera is, world units.
     pub eye: DVec3,
+    /// The point looked at; the centre of the image.
     pub target: DVec3,
+    /// Which way is up in the image (need not be orthogonal to the view direction).
     pub up: DVec3,
     /// Vertical field of view in degrees, (0, 179].
     pub fov: f64,
@@ -31,12 +34,19 @@ impl Default for Camera {
 /// Why a camera cannot form an image.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum CameraError {
+    /// The eye, the target or the up vector has a NaN or infinite component.
     #[error("camera: eye, target and up must be finite")]
     NotFinite,
+    /// The field of view is outside (0, 179] degrees.
     #[error("camera.fov = {fov} is out of range (0, 179] degrees")]
-    Fov { fov: f64 },
+    Fov {
+        /// The field of view given, degrees.
+        fov: f64,
+    },
+    /// The eye and the target are the same point, so there is no view direction.
     #[error("camera: eye and target coincide")]
     Coincide,
+    /// The up vector is zero or parallel to the view direction, so there is no right axis.
     #[error("camera: up is parallel to the view direction (or zero)")]
     UpParallel,
     /// A coordinate so large that the view direction's length overflows f64.
@@ -45,9 +55,13 @@ pub enum CameraError {
          {MAX_COORDINATE:e} (the view direction's length would overflow)"
     )]
     TooLarge {
+        /// Which vector: `eye`, `target` or `up`.
         what: &'static str,
+        /// Its x component.
         x: f64,
+        /// Its y component.
         y: f64,
+        /// Its z component.
         z: f64,
     },
 }
@@ -59,16 +73,24 @@ pub const MAX_COORDINATE: f64 = 1e150;
 /// Why a projection cannot be used.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ProjectionError {
+    /// The eye separation is negative, not finite or above [`MAX_EYE_SEPARATION`].
     #[error("eye separation = {value} is out of range [0, {MAX_EYE_SEPARATION}] (scene units)")]
-    EyeSeparation { value: f64 },
+    EyeSeparation {
+        /// The separation given, scene units.
+        value: f64,
+    },
 }
 
 /// The orthonormal frame of a camera: `forward` looks at the target, `right` x `up` is `-forward`.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraFrame {
+    /// Where the rays start, world units.
     pub eye: DVec3,
+    /// Unit vector from the eye towards the target.
     pub forward: DVec3,
+    /// Unit vector to the image's right.
     pub right: DVec3,
+    /// Unit vector to the image's top, orthogonal to `forward` and `right`.
     pub up: DVec3,
     /// tan(fov / 2).
     pub tan_half_fov: f64,
@@ -147,12 +169,18 @@ pub enum Projection {
     Mono,
     /// Two parallel pinhole views side by side (output twice as wide), eyes `eye_separation`
     /// apart along the camera's right axis, left eye on the left.
-    SideBySide { eye_separation: f64 },
+    SideBySide {
+        /// Distance between the eyes, scene units, [0, 1e6].
+        eye_separation: f64,
+    },
     /// Omni-directional stereo, equirectangular (longitude -180..180 degrees across, latitude
     /// 90..-90 down), left eye on top (output twice as tall). Each ray leaves from the point of
     /// the viewing circle of diameter `eye_separation` (in the camera's horizontal plane) where
     /// it is tangent to that circle; each eye's view should be 2:1.
-    Ods { eye_separation: f64 },
+    Ods {
+        /// Diameter of the viewing circle, scene units, [0, 1e6].
+        eye_separation: f64,
+    },
 }
 
 /// The largest eye separation accepted, in scene units.

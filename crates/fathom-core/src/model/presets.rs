@@ -6,7 +6,9 @@ use crate::scene_file::{self, SceneFileError};
 
 /// A built-in scene.
 pub struct Preset {
+    /// The name `--preset` takes.
     pub name: &'static str,
+    /// One line on what the scene shows, for `fathom list presets`.
     pub description: &'static str,
     /// The scene-file text.
     pub text: &'static str,
@@ -70,7 +72,12 @@ pub const DEFAULT_PRESET: &str = "mandelbulb";
 pub enum PresetError {
     /// No preset has this name; `hint` names the nearest valid ones.
     #[error("unknown preset `{name}`; {hint}")]
-    Unknown { name: String, hint: String },
+    Unknown {
+        /// The name given.
+        name: String,
+        /// The nearest valid names.
+        hint: String,
+    },
     /// The shipped text does not parse (a bug, caught by the tests).
     #[error(transparent)]
     File(#[from] SceneFileError),

@@ -105,8 +105,10 @@ pub struct Node {
     /// Domain operators (point transforms and distance modifiers), in order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub ops: Vec<Call<DomainOp>>,
+    /// How the node's surface looks.
     #[serde(default)]
     pub material: Material,
+    /// Subtrees joined to this node, each by its own `combine`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub children: Vec<Node>,
 }
@@ -141,6 +143,7 @@ impl Node {
         self.children.push(n);
         self
     }
+    /// Sets the node's material.
     pub fn material(mut self, m: Material) -> Self {
         self.material = m;
         self
@@ -173,6 +176,7 @@ pub struct Light {
     pub direction: DVec3,
     /// Linear RGB colour.
     pub colour: [f64; 3],
+    /// Brightness multiplier, [0, 1000].
     pub intensity: f64,
     /// Whether this light casts soft shadows.
     pub shadows: bool,
@@ -243,14 +247,19 @@ impl Default for RenderSettings {
 pub struct Scene {
     /// Scene-file format version; this build reads [`SCENE_VERSION`].
     pub version: u32,
+    /// The camera the scene opens with.
     #[serde(default)]
     pub camera: Camera,
+    /// Directional lights; one default light when left out.
     #[serde(default = "default_lights")]
     pub lights: Vec<Light>,
+    /// Render settings (steps, shading, fog, palette, ...).
     #[serde(default)]
     pub render: RenderSettings,
+    /// An iterated function system run on the point before the tree, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ifs: Option<Ifs>,
+    /// The root of the node tree.
     pub root: Node,
     /// Named camera paths ([`crate::flight`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

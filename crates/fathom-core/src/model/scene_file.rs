@@ -23,25 +23,41 @@ pub enum SceneFileError {
     /// `line`/`col` are 1-based (columns count characters).
     #[error("{origin}:{line}:{col}: {msg}")]
     Syntax {
+        /// Where the text came from (a path, `<preset mandelbulb>`, ...).
         origin: String,
+        /// 1-based line.
         line: usize,
+        /// 1-based column, in characters.
         col: usize,
+        /// What is wrong.
         msg: String,
     },
     /// The scene parsed but breaks a limit or rule that has no single place in the text (the
     /// tree is too deep, too many lights), or at a place left to its default.
     #[error("{origin}: {error}")]
-    Invalid { origin: String, error: SceneError },
+    Invalid {
+        /// Where the text came from.
+        origin: String,
+        /// The rule broken.
+        error: SceneError,
+    },
     /// The file could not be read or written.
     #[error("{origin}: {source}")]
     Io {
+        /// The path.
         origin: String,
+        /// The error from the operating system.
         #[source]
         source: std::io::Error,
     },
     /// The file is larger than [`limits::MAX_SCENE_FILE_BYTES`]; it was not read.
     #[error("{origin}: the file is {size} bytes; scene files are limited to {max} bytes", max = limits::MAX_SCENE_FILE_BYTES)]
-    TooLarge { origin: String, size: u64 },
+    TooLarge {
+        /// The path.
+        origin: String,
+        /// The file's size, bytes.
+        size: u64,
+    },
     /// The path is not a regular file (a directory, FIFO or device); it was not opened.
     #[error(transparent)]
     Read(crate::input_file::ReadError),

@@ -19,50 +19,110 @@ use thiserror::Error;
 /// The first rule a scene breaks. Node paths look like `root.children[1].ops[0]`.
 #[derive(Clone, Debug, PartialEq, Error)]
 pub enum SceneError {
+    /// The file's `version` is not the one this build reads.
     #[error("scene version {found} is not supported; this build reads version {SCENE_VERSION}")]
-    Version { found: u32 },
+    Version {
+        /// The version the scene gives.
+        found: u32,
+    },
+    /// The tree has more than [`limits::MAX_NODES`] nodes.
     #[error("the scene has {nodes} nodes; the limit is {max}", max = limits::MAX_NODES)]
-    TooManyNodes { nodes: usize },
+    TooManyNodes {
+        /// How many nodes the tree has.
+        nodes: usize,
+    },
+    /// The tree is deeper than [`limits::MAX_TREE_DEPTH`].
     #[error("the tree is {depth} levels deep; the limit is {max}", max = limits::MAX_TREE_DEPTH)]
-    TooDeep { depth: usize },
+    TooDeep {
+        /// How deep the tree is.
+        depth: usize,
+    },
+    /// The scene's IFS runs more than [`limits::MAX_IFS_ITERATIONS`] iterations.
     #[error("ifs.iterations = {iterations} is out of range [0, {max}]", max = limits::MAX_IFS_ITERATIONS)]
-    IfsIterations { iterations: u32 },
+    IfsIterations {
+        /// The iterations given.
+        iterations: u32,
+    },
+    /// The scene's IFS has more than [`limits::MAX_OPS_PER_LIST`] operators.
     #[error("ifs has {count} operators; the limit is {max}", max = limits::MAX_OPS_PER_LIST)]
-    IfsTooManyOps { count: usize },
+    IfsTooManyOps {
+        /// How many operators it has.
+        count: usize,
+    },
+    /// A node has more than [`limits::MAX_OPS_PER_LIST`] domain operators.
     #[error("{path}.ops: {count} operators; the limit is {max}", max = limits::MAX_OPS_PER_LIST)]
-    TooManyOps { path: String, count: usize },
+    TooManyOps {
+        /// The node's path.
+        path: String,
+        /// How many operators it has.
+        count: usize,
+    },
     /// A registry call (shape, combine, operator) with a bad parameter; `path` names the call,
     /// e.g. `root.children[0].shape` or `ifs.ops[2]`.
     #[error("{path}: {error}")]
-    Entry { path: String, error: EntryError },
+    Entry {
+        /// The call's path.
+        path: String,
+        /// What is wrong with its parameters.
+        error: EntryError,
+    },
+    /// A material field is outside its range.
     #[error("{path}.material.{field} = {value} is out of range [{min}, {max}]")]
     Material {
+        /// The node's path.
         path: String,
+        /// The material field.
         field: &'static str,
+        /// The value given.
         value: f64,
+        /// The field's lower bound.
         min: f64,
+        /// The field's upper bound.
         max: f64,
     },
+    /// The camera is invalid.
     #[error(transparent)]
     Camera(#[from] CameraError),
+    /// The scene has more than [`limits::MAX_LIGHTS`] lights.
     #[error("{count} lights; the limit is {max}", max = limits::MAX_LIGHTS)]
-    TooManyLights { count: usize },
+    TooManyLights {
+        /// How many lights the scene has.
+        count: usize,
+    },
+    /// A light has a zero or non-finite direction, or a colour or intensity outside [0, 1000].
     #[error(
         "lights[{index}]: direction must be finite and non-zero, colour and intensity in [0, 1000]"
     )]
-    Light { index: usize },
+    Light {
+        /// The light's index in `lights`.
+        index: usize,
+    },
     /// A flight path breaks a rule; `path` says where (`paths[0].keys[2].fov`).
     #[error("{path}: {error}")]
-    Flight { path: String, error: FlightError },
+    Flight {
+        /// Where in `paths` the rule is broken.
+        path: String,
+        /// The rule broken.
+        error: FlightError,
+    },
     /// A modulation binding breaks a rule; `path` says where (`bindings[1].param`).
     #[error("{path}: {error}")]
-    Binding { path: String, error: BindingError },
+    Binding {
+        /// Where in `bindings` the rule is broken.
+        path: String,
+        /// The rule broken.
+        error: BindingError,
+    },
     /// A render setting out of its range (`name` is the field of `render`).
     #[error("render.{name} = {value} is out of range [{min}, {max}]")]
     Render {
+        /// The field of `render`.
         name: &'static str,
+        /// The value given.
         value: f64,
+        /// The field's lower bound.
         min: f64,
+        /// The field's upper bound.
         max: f64,
     },
 }

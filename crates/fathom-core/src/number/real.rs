@@ -64,44 +64,63 @@ pub trait Real:
     /// Build from per-lane values (missing lanes repeat the last given value).
     fn from_lanes(v: &[f64]) -> Self;
 
+    /// Square root, per lane.
     fn sqrt(self) -> Self;
+    /// Absolute value, per lane.
     fn abs(self) -> Self;
+    /// The smaller of the two, per lane.
     fn min(self, o: Self) -> Self;
+    /// The larger of the two, per lane.
     fn max(self, o: Self) -> Self;
+    /// Largest whole number not above, per lane.
     fn floor(self) -> Self;
     /// Round half away from zero.
     fn round(self) -> Self;
+    /// Sine (radians), per lane.
     fn sin(self) -> Self;
+    /// Cosine (radians), per lane.
     fn cos(self) -> Self;
+    /// Sine and cosine at once, per lane.
     fn sin_cos(self) -> (Self, Self);
+    /// Arc cosine, radians in [0, pi], per lane.
     fn acos(self) -> Self;
+    /// Arc sine, radians in [-pi/2, pi/2], per lane.
     fn asin(self) -> Self;
     /// `self.atan2(x)` is the angle of the point `(x, self)`.
     fn atan2(self, x: Self) -> Self;
+    /// Natural logarithm, per lane.
     fn ln(self) -> Self;
+    /// `e` raised to `self`, per lane.
     fn exp(self) -> Self;
     /// `self` raised to `e`, for `self > 0`.
     fn powf(self, e: Self) -> Self;
     /// -1, 0 or +1 (0 maps to +1 on some paths: use only where the sign of 0 does not matter).
     fn signum(self) -> Self;
 
+    /// Per lane: `self < o`.
     fn lt(self, o: Self) -> Self::Mask;
+    /// Per lane: `self <= o`.
     fn le(self, o: Self) -> Self::Mask;
+    /// Per lane: `self > o`.
     fn gt(self, o: Self) -> Self::Mask;
+    /// Per lane: `self >= o`.
     fn ge(self, o: Self) -> Self::Mask;
     /// Lanes that are neither NaN nor infinite.
     fn is_finite(self) -> Self::Mask;
     /// Per lane: `m ? a : b`.
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
 
+    /// Per lane: `self` clamped to `[lo, hi]`.
     #[inline(always)]
     fn clamp(self, lo: Self, hi: Self) -> Self {
         self.max(lo).min(hi)
     }
+    /// Zero in every lane.
     #[inline(always)]
     fn zero() -> Self {
         Self::splat(0.0)
     }
+    /// One in every lane.
     #[inline(always)]
     fn one() -> Self {
         Self::splat(1.0)

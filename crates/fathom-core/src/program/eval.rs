@@ -31,8 +31,11 @@ pub use crate::shared::NO_TRAP;
 /// Keeping only the distance lets the optimiser drop the material bookkeeping of combines,
 /// which the sphere tracer's marching loop never reads.
 pub trait Slot<S: Real>: Copy {
+    /// The slot for a value.
     fn from_value(v: Value<S>) -> Self;
+    /// The value in the slot (a distance-only slot fills the rest with zeros).
     fn to_value(self) -> Value<S>;
+    /// The distance, to change in place.
     fn d_mut(&mut self) -> &mut S;
 }
 
@@ -84,6 +87,7 @@ impl<S: Real> Default for Evaluator<S> {
 }
 
 impl<S: Real> Evaluator<S> {
+    /// An evaluator with its stacks allocated to the limits.
     pub fn new() -> Self {
         Evaluator {
             points: Vec::with_capacity(crate::limits::MAX_POINT_STACK),

@@ -47,15 +47,20 @@ const _: () = assert!(PREPASS_LEVELS[2] * 4 == PREPASS_COARSEST);
 /// The WGSL type of a shared constant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WgslType {
+    /// A WGSL `f32`.
     F32,
+    /// A WGSL `u32`.
     U32,
 }
 
 /// One shared constant as the shader declares it.
 #[derive(Clone, Copy, Debug)]
 pub struct WgslConstant {
+    /// The constant's name, the same in Rust and WGSL.
     pub name: &'static str,
+    /// Its WGSL type.
     pub ty: WgslType,
+    /// Its value (whole for `U32`).
     pub value: f64,
 }
 

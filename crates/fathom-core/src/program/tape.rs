@@ -99,12 +99,16 @@ impl Instr {
 /// Why a scene did not compile.
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum CompileError {
+    /// The scene breaks a rule of validation.
     #[error("invalid scene: {0}")]
     Invalid(#[from] crate::validate::SceneError),
+    /// The tape would exceed `limits::MAX_TAPE_LEN` instructions (the count it would have).
     #[error("the tape would have {0} instructions; the limit is {max}", max = limits::MAX_TAPE_LEN)]
     TooLong(usize),
+    /// The parameter buffer would exceed `limits::MAX_PARAMS` slots (the count it would have).
     #[error("the parameter buffer would have {0} slots; the limit is {max}", max = limits::MAX_PARAMS)]
     TooManyParams(usize),
+    /// A parameter update was given a scene whose tree no longer matches the tape.
     #[error("the scene's structure changed; compile a new tape")]
     StructureChanged,
 }

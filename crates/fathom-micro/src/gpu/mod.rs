@@ -75,7 +75,9 @@ pub struct MicroGpu {
 /// rewrite of the parameter and material buffers only (an animation frame).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TapeUploads {
+    /// Uploads that created new tape buffers.
     pub tapes_created: u64,
+    /// Uploads that rewrote only the parameter and material buffers.
     pub params_rewritten: u64,
 }
 

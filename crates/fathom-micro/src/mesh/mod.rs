@@ -26,31 +26,47 @@ pub use uv::UvProjection;
 /// optional per-corner normals and UVs.
 #[derive(Clone, Debug, Default)]
 pub struct RawMesh {
+    /// Vertex positions.
     pub positions: Vec<DVec3>,
+    /// Vertex indices of each triangle.
     pub triangles: Vec<[u32; 3]>,
+    /// Normals per triangle corner, when the file has them.
     pub corner_normals: Option<Vec<[DVec3; 3]>>,
+    /// UVs per triangle corner, when the file has them.
     pub corner_uvs: Option<Vec<[DVec2; 3]>>,
 }
 
 /// A cleaned mesh: welded positions, one unit normal per position, UVs per triangle corner.
 #[derive(Clone, Debug)]
 pub struct TriangleMesh {
+    /// Welded vertex positions.
     pub positions: Vec<DVec3>,
+    /// Unit normal per position.
     pub normals: Vec<DVec3>,
+    /// Position indices of each triangle.
     pub triangles: Vec<[u32; 3]>,
+    /// UVs per triangle corner.
     pub uvs: Vec<[DVec2; 3]>,
 }
 
 /// What cleaning a mesh found and did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshReport {
+    /// Triangles in the file.
     pub input_triangles: usize,
+    /// Triangles kept.
     pub triangles: usize,
+    /// Vertices after welding.
     pub vertices: usize,
+    /// Triangles skipped for a NaN or infinite coordinate.
     pub skipped_non_finite: usize,
+    /// Triangles skipped for a repeated vertex or a (near-)zero area.
     pub skipped_degenerate: usize,
+    /// Triangles skipped for a (near-)zero or non-finite area in UV space.
     pub skipped_zero_uv_area: usize,
+    /// Edges shared by more than two triangles.
     pub non_manifold_edges: usize,
+    /// Whether the normals were computed (the file had none).
     pub normals_computed: bool,
     /// "file" or the projection's name.
     pub uv_source: String,

@@ -31,9 +31,13 @@ pub fn load(path: &Path) -> Result<RawMesh, MeshLoadError> {
 /// What the first pass counted.
 #[derive(Debug, Default, PartialEq)]
 pub struct Counts {
+    /// `v` lines.
     pub positions: u64,
+    /// `vt` lines.
     pub texcoords: u64,
+    /// `vn` lines.
     pub normals: u64,
+    /// Triangles the faces make (a polygon of n corners makes n - 2).
     pub triangles: u64,
 }
 

@@ -8,8 +8,11 @@ use glam::{DVec2, DVec3};
 /// A UV projection.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum UvProjection {
+    /// Along the mesh's thinnest axis.
     Planar,
+    /// Each triangle along the axis its normal points most along.
     Box,
+    /// Longitude and latitude around the mesh's centre.
     Spherical,
 }
 
@@ -21,6 +24,7 @@ pub const PROJECTIONS: &[(UvProjection, &str)] = &[
 ];
 
 impl UvProjection {
+    /// The name `--uv` takes.
     pub fn name(self) -> &'static str {
         PROJECTIONS
             .iter()

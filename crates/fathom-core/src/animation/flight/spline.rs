@@ -18,6 +18,7 @@ pub struct CentripetalSegment {
 }
 
 impl CentripetalSegment {
+    /// The segment from `p1` to `p2`, shaped by the neighbours `p0` and `p3` where there are any.
     pub fn new(p0: Option<DVec3>, p1: DVec3, p2: DVec3, p3: Option<DVec3>) -> Self {
         let chord = p2 - p1;
         if chord.length_squared() == 0.0 {

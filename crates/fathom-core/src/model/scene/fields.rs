@@ -17,6 +17,7 @@ pub enum Slot<'a> {
 
 /// One declared field of a settings structure `T`.
 pub struct FieldSpec<T> {
+    /// The field's name in scene files and parameter paths.
     pub name: &'static str,
     /// Number of components (1, 3 for vectors and colours, 12 for the palette).
     pub width: usize,
@@ -24,6 +25,7 @@ pub struct FieldSpec<T> {
     pub range: Option<(f64, f64)>,
     /// Whether the field holds a whole number.
     pub int: bool,
+    /// One line on what the field does, for the docs and tooltips.
     pub doc: &'static str,
     /// The field's storage in a value of `T`.
     pub slot: for<'a> fn(&'a mut T) -> Slot<'a>,

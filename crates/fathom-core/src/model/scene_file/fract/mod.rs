@@ -40,6 +40,7 @@ use std::path::Path;
 /// A `.fract` file read as a scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Imported {
+    /// The scene the file was translated into.
     pub scene: Scene,
     /// Every setting or section that was not carried over, and why.
     pub warnings: Vec<String>,
