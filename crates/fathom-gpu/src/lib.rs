@@ -6,6 +6,8 @@
 //!   and its naga validation;
 //! - [`device`]: adapter and device set-up, headless or for a surface, with clear errors;
 //! - [`renderer`]: buffers, pipelines, the render passes and the readback into a `Frame`;
+//! - [`path`]: the path tracer (fathom-pathtrace's integrator in WGSL), accumulating samples
+//!   on the device;
 //! - [`precision`]: where f32 positions stop being enough and the CPU's f64 path must take over.
 
 #![warn(missing_docs)]
@@ -13,6 +15,7 @@
 pub mod device;
 pub mod error;
 mod passes;
+pub mod path;
 pub mod precision;
 pub mod renderer;
 pub mod shader;

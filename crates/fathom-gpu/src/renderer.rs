@@ -39,6 +39,8 @@ pub struct Renderer {
     pub(crate) n_materials: u32,
     /// Render targets of the last image size, reused while the size stays.
     pub(crate) targets: Option<crate::passes::Targets>,
+    /// The path tracer's pipeline and accumulation (built on first use).
+    pub(crate) path: Option<crate::path::PathState>,
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -240,6 +242,7 @@ impl Renderer {
             uploaded: Vec::new(),
             n_materials: 0,
             targets: None,
+            path: None,
         })
     }
 

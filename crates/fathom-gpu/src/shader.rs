@@ -32,6 +32,10 @@ pub const INTERP: &str = include_str!("wgsl/interp.wgsl");
 pub const EVAL_POINTS: &str = include_str!("wgsl/eval_points.wgsl");
 /// The render passes (prepass, depth, shade).
 pub const TRACE: &str = include_str!("wgsl/trace.wgsl");
+/// Display conversions (tonemap, sRGB) shared by the render passes and the path tracer.
+pub const POST: &str = include_str!("wgsl/post.wgsl");
+/// The path tracer (fathom-pathtrace's integrator in WGSL).
+pub const PATH: &str = include_str!("wgsl/path.wgsl");
 
 /// One registry family as the WGSL side sees it.
 pub struct WgslFamily {
@@ -197,7 +201,22 @@ pub fn interpreter_source() -> String {
 /// The whole WGSL program: the interpreter library and the entry points.
 pub fn source() -> String {
     let mut s = interpreter_source();
-    for part in [EVAL_POINTS, TRACE] {
+    for part in [EVAL_POINTS, POST, TRACE] {
+        s += part;
+        s += "\n";
+    }
+    s
+}
+
+/// The path tracer's WGSL program: the interpreter library, the constants shared with
+/// fathom-pathtrace (`fathom_pathtrace::shared`) and with `crate::path`, and `path.wgsl`. A
+/// module of its own, built the first time a path is traced, so the preview passes never
+/// pay for compiling it.
+pub fn path_source() -> String {
+    let mut s = interpreter_source();
+    s += &fathom_pathtrace::shared::wgsl_declarations();
+    s += &crate::path::wgsl_declarations();
+    for part in [POST, PATH] {
         s += part;
         s += "\n";
     }

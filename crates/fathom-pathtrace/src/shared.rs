@@ -80,6 +80,22 @@ pub const WGSL_CONSTANTS: &[WgslConstant] = &[
     f("PT_DENOISE_SIGMA_LUMINANCE", DENOISE_SIGMA_LUMINANCE),
 ];
 
+/// [`WGSL_CONSTANTS`] as WGSL `const` declarations (the form of
+/// `fathom_core::shared::wgsl_declarations`), for a shader to include ahead of its code.
+pub fn wgsl_declarations() -> String {
+    let mut s =
+        String::from("// GENERATED from fathom_pathtrace::shared: constants shared with Rust.\n");
+    for c in WGSL_CONSTANTS {
+        let (ty, v) = match c.ty {
+            // `{:?}` keeps a decimal point or exponent, as WGSL's f32 literals need.
+            WgslType::F32 => ("f32", format!("{:?}", c.value as f32)),
+            WgslType::U32 => ("u32", format!("{}u", c.value as u32)),
+        };
+        s += &format!("const {}: {ty} = {v};\n", c.name);
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
