@@ -37,7 +37,7 @@ struct AccumulatorKey {
 /// Where the samples accumulate.
 enum Accumulator {
     /// On the CPU, in fathom-pathtrace's accumulator.
-    Cpu(Progressive),
+    Cpu(Box<Progressive>),
     /// On the GPU, in the session's renderer (fathom-gpu's path tracer), which held this
     /// many samples after the last render (a renderer handed over in between starts over).
     Gpu { samples: u32 },
@@ -82,7 +82,7 @@ impl PathBackend {
             counters.path_accumulators += 1;
             *slot = Some(PathBackend {
                 key,
-                accumulator: Accumulator::Cpu(Progressive::new(tracer)),
+                accumulator: Accumulator::Cpu(Box::new(Progressive::new(tracer))),
             });
         }
         Ok(slot.as_mut().expect("made above"))
