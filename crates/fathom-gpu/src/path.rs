@@ -427,10 +427,11 @@ impl PathState {
         })
     }
 
-    /// The accumulation buffer, texture and bind group for a `w` x `h` image.
-    fn targets(&mut self, r: &Renderer, w: u32, h: u32) -> Result<(), GpuError> {
+    /// The accumulation buffer, texture and bind group for a `w` x `h` image; `true` when
+    /// they were (re)built.
+    fn targets(&mut self, r: &Renderer, w: u32, h: u32) -> Result<bool, GpuError> {
         if self.targets.as_ref().is_some_and(|t| t.size == (w, h)) {
-            return Ok(());
+            return Ok(false);
         }
         self.targets = None;
         let tex_max = r.gpu.limits.max_texture_dimension_2d;
@@ -493,7 +494,7 @@ impl PathState {
             texture,
             group,
         });
-        Ok(())
+        Ok(true)
     }
 }
 
@@ -539,10 +540,18 @@ impl Renderer {
             self.path = Some(PathState::new(self)?);
         }
         let mut state = self.path.take().expect("built above");
-        let made = state.targets(self, w, h);
-        if let Err(e) = made {
-            self.path = Some(state);
-            return Err(e);
+        match state.targets(self, w, h) {
+            Ok(true) => {
+                // The denoiser's bind groups held the old accumulation and texture.
+                if let Some(d) = self.denoise.as_mut() {
+                    d.targets = None;
+                }
+            }
+            Ok(false) => {}
+            Err(e) => {
+                self.path = Some(state);
+                return Err(e);
+            }
         }
         let q = &self.gpu.queue;
         q.write_buffer(&state.materials, 0, bytemuck::cast_slice(&rows));
@@ -715,6 +724,13 @@ impl Renderer {
         stats.dropped_non_finite = c[0] as u64;
         stats.evaluations = evaluations as u64;
         Ok((f, stats))
+    }
+
+    /// The accumulation buffer, display texture and size of the current image.
+    pub(crate) fn path_buffers(&self) -> Option<(&wgpu::Buffer, &wgpu::Texture, (u32, u32))> {
+        let s = self.path.as_ref().filter(|s| s.globals.is_some())?;
+        let t = s.targets.as_ref()?;
+        Some((&t.accum, &t.texture, t.size))
     }
 
     /// The running mean of the path-traced image (8-bit sRGB, tonemapped as the output files

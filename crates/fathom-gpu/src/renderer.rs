@@ -41,6 +41,8 @@ pub struct Renderer {
     pub(crate) targets: Option<crate::passes::Targets>,
     /// The path tracer's pipeline and accumulation (built on first use).
     pub(crate) path: Option<crate::path::PathState>,
+    /// The path tracer's denoiser (built on first use).
+    pub(crate) denoise: Option<crate::denoise::DenoiseState>,
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -243,6 +245,7 @@ impl Renderer {
             n_materials: 0,
             targets: None,
             path: None,
+            denoise: None,
         })
     }
 

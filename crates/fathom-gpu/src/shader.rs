@@ -36,6 +36,10 @@ pub const TRACE: &str = include_str!("wgsl/trace.wgsl");
 pub const POST: &str = include_str!("wgsl/post.wgsl");
 /// The path tracer (fathom-pathtrace's integrator in WGSL).
 pub const PATH: &str = include_str!("wgsl/path.wgsl");
+/// The path tracer's per-pixel running sums, shared by the tracer and the denoiser.
+pub const ACCUM: &str = include_str!("wgsl/accum.wgsl");
+/// The à-trous denoiser (fathom-pathtrace's denoise.rs in WGSL).
+pub const DENOISE: &str = include_str!("wgsl/denoise.wgsl");
 
 /// One registry family as the WGSL side sees it.
 pub struct WgslFamily {
@@ -216,7 +220,17 @@ pub fn path_source() -> String {
     let mut s = interpreter_source();
     s += &fathom_pathtrace::shared::wgsl_declarations();
     s += &crate::path::wgsl_declarations();
-    for part in [POST, PATH] {
+    for part in [POST, ACCUM, PATH] {
+        s += part;
+        s += "\n";
+    }
+    s
+}
+
+/// The denoiser's WGSL program (no interpreter: it reads only the accumulation).
+pub fn denoise_source() -> String {
+    let mut s = fathom_pathtrace::shared::wgsl_declarations();
+    for part in [POST, ACCUM, DENOISE] {
         s += part;
         s += "\n";
     }

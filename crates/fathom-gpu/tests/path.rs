@@ -289,3 +289,43 @@ fn unsupported_features_and_bad_settings_are_refused_by_name() {
         .unwrap_err();
     assert!(e.to_string().contains("aperture"), "{e}");
 }
+
+/// The denoiser on the device computes what the CPU's computes from the same accumulation.
+#[test]
+fn the_gpu_denoiser_matches_the_cpu_one() {
+    let mut r = common::renderer();
+    for preset in ["menger", "model-tree"] {
+        let scene = presets::load(preset).unwrap();
+        let (frame, _) = gpu_render(&mut r, &scene, PathSettings::new(32, 24), 4);
+        let s = fathom_pathtrace::DenoiseSettings::default();
+        let cpu = fathom_pathtrace::denoise(&frame, &s);
+        let gpu = r.path_denoise(&s).unwrap();
+        assert_eq!(gpu.len(), cpu.len());
+        let mut worst = 0.0f32;
+        let mut sum = 0.0f64;
+        for (a, b) in cpu.iter().zip(&gpu) {
+            for c in 0..3 {
+                let d = (a[c] - b[c]).abs() / (0.01 + a[c].abs());
+                worst = worst.max(d);
+                sum += (a[c] - b[c]).abs() as f64;
+            }
+        }
+        let mean_diff = sum / (3 * cpu.len()) as f64;
+        println!("{preset}: worst relative difference {worst:.2e}, mean abs {mean_diff:.2e}");
+        assert!(
+            worst < 1e-2,
+            "{preset}: a pixel differs by {worst} (relative)"
+        );
+        assert!(
+            mean_diff < 1e-4 * (1.0 + mean(&frame)),
+            "{preset}: mean difference {mean_diff}"
+        );
+        // And it filtered: the denoised image is not the noisy one.
+        assert!(
+            gpu.iter()
+                .zip(&frame.colour)
+                .any(|(a, b)| (a[0] - b[0]).abs() > 1e-3),
+            "{preset}: the denoiser changed nothing"
+        );
+    }
+}

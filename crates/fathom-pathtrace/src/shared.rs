@@ -37,6 +37,10 @@ pub const DENOISE_SIGMA_DEPTH: f64 = 1.0;
 /// Default luminance-weight scale of the denoiser (SVGF's sigma_l).
 pub const DENOISE_SIGMA_LUMINANCE: f64 = 4.0;
 
+/// The denoiser divides colour by the first-hit albedo floored at this (black surfaces keep
+/// their colour undivided).
+pub const DENOISE_MIN_ALBEDO: f64 = 1e-3;
+
 /// One shared constant as a shader would declare it.
 #[derive(Clone, Copy, Debug)]
 pub struct WgslConstant {
@@ -78,6 +82,7 @@ pub const WGSL_CONSTANTS: &[WgslConstant] = &[
     f("PT_DENOISE_SIGMA_NORMAL", DENOISE_SIGMA_NORMAL),
     f("PT_DENOISE_SIGMA_DEPTH", DENOISE_SIGMA_DEPTH),
     f("PT_DENOISE_SIGMA_LUMINANCE", DENOISE_SIGMA_LUMINANCE),
+    f("PT_DENOISE_MIN_ALBEDO", DENOISE_MIN_ALBEDO),
 ];
 
 /// [`WGSL_CONSTANTS`] as WGSL `const` declarations (the form of

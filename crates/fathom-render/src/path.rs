@@ -141,7 +141,9 @@ impl PathBackend {
         let traced_ms = t0.elapsed().as_secs_f64() * 1e3;
         let image = progressive.frame();
         let st = progressive.stats().clone();
-        Ok(finish(image, &st, first, traced_ms, req, control, pool))
+        Ok(finish(
+            image, None, &st, first, traced_ms, req, control, pool,
+        ))
     }
 
     /// [`PathBackend::render`] on the GPU: the accumulator lives in `gpu`'s renderer, which
@@ -232,7 +234,16 @@ impl PathBackend {
         }
         let traced_ms = t0.elapsed().as_secs_f64() * 1e3;
         let (image, st) = renderer.path_frame()?;
-        let mut r = finish(image, &st, first, traced_ms, req, control, None);
+        // The denoiser runs on the device too (the same filter as the CPU's).
+        let t1 = Instant::now();
+        let denoised = if p.denoise {
+            Some(renderer.path_denoise(&DenoiseSettings::default())?)
+        } else {
+            None
+        };
+        let denoise_ms = t1.elapsed().as_secs_f64() * 1e3;
+        let mut r = finish(image, denoised, &st, first, traced_ms, req, control, None);
+        r.stats.ms.post += denoise_ms;
         let g = renderer.gpu();
         r.stats.adapter = Some(g.adapter_name());
         r.stats.adapter_is_software = Some(g.is_software());
@@ -259,10 +270,12 @@ fn report_passes(
     control.report(passes * units + units_done, total * units);
 }
 
-/// The rendered frame and statistics of an accumulated image (denoised when asked), the same
-/// for both accumulators.
+/// The rendered frame and statistics of an accumulated image (denoised when asked, here
+/// unless `denoised` is given), the same for both accumulators.
+#[allow(clippy::too_many_arguments)]
 fn finish(
     image: fathom_pathtrace::Frame,
+    denoised: Option<Vec<[f32; 3]>>,
     st: &fathom_pathtrace::Stats,
     first: u32,
     traced_ms: f64,
@@ -273,12 +286,14 @@ fn finish(
     let p = &req.path;
     let t1 = Instant::now();
     let noise = image.relative_noise();
-    let denoised = p.denoise.then(|| {
-        let run = || fathom_pathtrace::denoise(&image, &DenoiseSettings::default());
-        match pool {
-            Some(pool) => pool.install(run),
-            None => run(),
-        }
+    let denoised = denoised.or_else(|| {
+        p.denoise.then(|| {
+            let run = || fathom_pathtrace::denoise(&image, &DenoiseSettings::default());
+            match pool {
+                Some(pool) => pool.install(run),
+                None => run(),
+            }
+        })
     });
     let colour = denoised.unwrap_or(image.colour);
     let whole = Frame {
@@ -433,6 +448,13 @@ mod tests {
         assert_eq!(red.stats.path.unwrap().samples_added, 4);
         assert!(red.frame != once.frame);
         assert_eq!(at_once.gpu().unwrap().objects_built(), built);
+        // Denoised on the device: only the colour changes.
+        req.path.denoise = true;
+        let clean = at_once.render(&cam, &req).unwrap();
+        assert!(clean.stats.path.unwrap().denoised);
+        assert_eq!(clean.frame.depth, red.frame.depth);
+        assert_ne!(clean.frame.colour, red.frame.colour);
+        req.path.denoise = false;
         // The CPU's image of the same view: the same mean within its noise.
         let mut cpu = Session::new(scene).unwrap();
         req.path.gpu = false;

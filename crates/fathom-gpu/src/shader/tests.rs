@@ -105,6 +105,12 @@ fn the_path_tracer_validates_and_its_rust_mirrors_have_the_same_layout() {
     check_layouts(&module, crate::path::rust_layouts());
 }
 
+#[test]
+fn the_denoiser_validates_and_its_rust_mirrors_have_the_same_layout() {
+    let module = validate(&denoise_source()).unwrap();
+    check_layouts(&module, crate::denoise::rust_layouts());
+}
+
 fn check_layouts(module: &naga::Module, layouts: Vec<crate::passes::Layout>) {
     for (rust_name, size, fields) in layouts {
         let wgsl_name = rust_name.strip_prefix("Gpu").unwrap_or(rust_name);
@@ -170,6 +176,8 @@ fn shared_constants_are_generated_not_typed_into_wgsl_files() {
             ("eval_points", EVAL_POINTS),
             ("post", POST),
             ("path", PATH),
+            ("accum", ACCUM),
+            ("denoise", DENOISE),
         ] {
             assert!(
                 !src.contains(&format!("const {}:", name)),

@@ -29,13 +29,7 @@ struct PtGlobals {
     cones: array<PtCone, 8>,
 }
 
-// The running sums of one pixel (progressive.rs's Pixel).
-struct PtPx {
-    sum: vec4f,    // radiance sum, finite samples
-    stats: vec4f,  // Welford mean and M2 of luminance, distance evaluations, hits
-    albedo: vec4f, // first-hit albedo sum, first-hit depth sum
-    normal: vec4f, // first-hit normal sum, material id of the latest sample that hit (bits)
-}
+// `struct PtPx`, the running sums of one pixel, is in accum.wgsl.
 
 @group(1) @binding(0) var<uniform> pg: PtGlobals;
 // Per material PT_MATERIAL_VEC4S vec4s, see path.rs (`material_rows`).
