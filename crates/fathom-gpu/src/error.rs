@@ -71,6 +71,12 @@ pub enum GpuError {
     /// Bad input (a scene that does not compile, a zero-sized image).
     #[error("{0}")]
     Invalid(String),
+    /// The path tracer refused the scene or its settings (names the setting or node).
+    #[error(transparent)]
+    Path(#[from] fathom_pathtrace::PathTraceError),
+    /// Something the CPU path tracer renders that the GPU one does not yet.
+    #[error("the GPU path tracer does not support {0} yet; render it on the CPU (leave out --gpu)")]
+    PathUnsupported(String),
     /// The view needs more precision than f32 positions give; use the CPU's f64 path.
     #[error(
         "the view is zoomed too deep for f32 on the GPU (pixel footprint {footprint:e} at distance \

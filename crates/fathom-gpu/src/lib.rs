@@ -6,13 +6,18 @@
 //!   and its naga validation;
 //! - [`device`]: adapter and device set-up, headless or for a surface, with clear errors;
 //! - [`renderer`]: buffers, pipelines, the render passes and the readback into a `Frame`;
+//! - [`path`]: the path tracer (fathom-pathtrace's integrator in WGSL), accumulating samples
+//!   on the device;
+//! - [`denoise`]: the path tracer's à-trous denoiser on the device;
 //! - [`precision`]: where f32 positions stop being enough and the CPU's f64 path must take over.
 
 #![warn(missing_docs)]
 
+pub mod denoise;
 pub mod device;
 pub mod error;
 mod passes;
+pub mod path;
 pub mod precision;
 pub mod renderer;
 pub mod shader;

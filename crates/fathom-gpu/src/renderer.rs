@@ -38,6 +38,10 @@ pub struct Renderer {
     pub(crate) n_materials: u32,
     /// Render targets of the last image size, reused while the size stays.
     pub(crate) targets: Option<Targets>,
+    /// The path tracer's pipeline and accumulation (built on first use).
+    pub(crate) path: Option<crate::path::PathState>,
+    /// The path tracer's denoiser (built on first use).
+    pub(crate) denoise: Option<crate::denoise::DenoiseState>,
 }
 
 /// Buffers and the output texture for one output size (rebuilt only when it changes).
@@ -250,6 +254,8 @@ impl Renderer {
             uploaded: Vec::new(),
             n_materials: 0,
             targets: None,
+            path: None,
+            denoise: None,
         })
     }
 

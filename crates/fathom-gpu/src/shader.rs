@@ -32,6 +32,14 @@ pub const INTERP: &str = include_str!("wgsl/interp.wgsl");
 pub const EVAL_POINTS: &str = include_str!("wgsl/eval_points.wgsl");
 /// The render passes (prepass, depth, shade).
 pub const TRACE: &str = include_str!("wgsl/trace.wgsl");
+/// Display conversions (tonemap, sRGB) shared by the render passes and the path tracer.
+pub const POST: &str = include_str!("wgsl/post.wgsl");
+/// The path tracer (fathom-pathtrace's integrator in WGSL).
+pub const PATH: &str = include_str!("wgsl/path.wgsl");
+/// The path tracer's per-pixel running sums, shared by the tracer and the denoiser.
+pub const ACCUM: &str = include_str!("wgsl/accum.wgsl");
+/// The à-trous denoiser (fathom-pathtrace's denoise.rs in WGSL).
+pub const DENOISE: &str = include_str!("wgsl/denoise.wgsl");
 
 /// One registry family as the WGSL side sees it.
 pub struct WgslFamily {
@@ -197,7 +205,32 @@ pub fn interpreter_source() -> String {
 /// The whole WGSL program: the interpreter library and the entry points.
 pub fn source() -> String {
     let mut s = interpreter_source();
-    for part in [EVAL_POINTS, TRACE] {
+    for part in [EVAL_POINTS, POST, TRACE] {
+        s += part;
+        s += "\n";
+    }
+    s
+}
+
+/// The path tracer's WGSL program: the interpreter library, the constants shared with
+/// fathom-pathtrace (`fathom_pathtrace::shared`) and with `crate::path`, and `path.wgsl`. A
+/// module of its own, built the first time a path is traced, so the preview passes never
+/// pay for compiling it.
+pub fn path_source() -> String {
+    let mut s = interpreter_source();
+    s += &fathom_pathtrace::shared::wgsl_declarations();
+    s += &crate::path::wgsl_declarations();
+    for part in [POST, ACCUM, PATH] {
+        s += part;
+        s += "\n";
+    }
+    s
+}
+
+/// The denoiser's WGSL program (no interpreter: it reads only the accumulation).
+pub fn denoise_source() -> String {
+    let mut s = fathom_pathtrace::shared::wgsl_declarations();
+    for part in [POST, ACCUM, DENOISE] {
         s += part;
         s += "\n";
     }

@@ -19,7 +19,8 @@
 
 use crate::progressive::Frame;
 use crate::shared::{
-    ATROUS_PASSES, DENOISE_SIGMA_DEPTH, DENOISE_SIGMA_LUMINANCE, DENOISE_SIGMA_NORMAL,
+    ATROUS_PASSES, DENOISE_MIN_ALBEDO, DENOISE_SIGMA_DEPTH, DENOISE_SIGMA_LUMINANCE,
+    DENOISE_SIGMA_NORMAL,
 };
 
 /// The filter's knobs.
@@ -49,7 +50,7 @@ impl Default for DenoiseSettings {
 /// The B3-spline kernel's 1D taps.
 const KERNEL: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 /// Smallest albedo divided by (black surfaces keep their colour undivided).
-const MIN_ALBEDO: f32 = 1e-3;
+const MIN_ALBEDO: f32 = DENOISE_MIN_ALBEDO as f32;
 
 fn lum(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]

@@ -545,5 +545,55 @@ impl PathTracer {
     }
 }
 
+/// What [`PathTracer::new`] prepared from the scene and settings, for a port that runs the same
+/// estimator elsewhere: fathom-gpu's WGSL path tracer bakes exactly these into its buffers, so
+/// the two cannot read a scene differently.
+impl PathTracer {
+    /// One look per tape material.
+    pub fn looks(&self) -> &[Look] {
+        &self.looks
+    }
+    /// The thin-lens camera.
+    pub fn lens(&self) -> &ThinLens {
+        &self.lens
+    }
+    /// How rays march (steps, distance, hit threshold slope).
+    pub fn march_params(&self) -> &MarchParams {
+        &self.params
+    }
+    /// Directional lights.
+    pub fn cone_lights(&self) -> &[ConeLight] {
+        &self.cones
+    }
+    /// Spherical area lights.
+    pub fn sphere_lights(&self) -> &[SphereLight] {
+        &self.spheres
+    }
+    /// The environment.
+    pub fn environment(&self) -> &Environment {
+        &self.env
+    }
+    /// Scale of the environment where it lights surfaces.
+    pub fn environment_light(&self) -> f64 {
+        self.env_light
+    }
+    /// The fog, if any.
+    pub fn medium(&self) -> Option<&Medium> {
+        self.medium.as_ref()
+    }
+    /// Most bounces of a path.
+    pub fn max_bounces(&self) -> u32 {
+        self.max_bounces
+    }
+    /// The sampler's scene-wide seed.
+    pub fn seed(&self) -> u32 {
+        self.seed
+    }
+    /// Whether next-event estimation is on.
+    pub fn light_sampling(&self) -> bool {
+        self.light_sampling
+    }
+}
+
 #[cfg(test)]
 mod tests;

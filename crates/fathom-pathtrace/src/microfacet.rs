@@ -169,6 +169,13 @@ impl AlbedoTables {
         t
     }
 
+    /// The raw tables, for upload to a shader: (E, W) row-major with cos(theta) across
+    /// ([`ALBEDO_TABLE`] x [`ALBEDO_TABLE`], rows by roughness), then (E_avg, W_avg) per row.
+    /// [`AlbedoTables::lookup`] and [`AlbedoTables::averages`] are how they are read.
+    pub fn raw(&self) -> [&[f64]; 4] {
+        [&self.e, &self.w, &self.e_avg, &self.w_avg]
+    }
+
     /// (E, W) at cos(theta) `mu` and roughness `r` = sqrt(alpha).
     pub fn lookup(&self, mu: f64, r: f64) -> (f64, f64) {
         let n = ALBEDO_TABLE;

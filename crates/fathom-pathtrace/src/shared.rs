@@ -37,6 +37,10 @@ pub const DENOISE_SIGMA_DEPTH: f64 = 1.0;
 /// Default luminance-weight scale of the denoiser (SVGF's sigma_l).
 pub const DENOISE_SIGMA_LUMINANCE: f64 = 4.0;
 
+/// The denoiser divides colour by the first-hit albedo floored at this (black surfaces keep
+/// their colour undivided).
+pub const DENOISE_MIN_ALBEDO: f64 = 1e-3;
+
 /// One shared constant as a shader would declare it.
 #[derive(Clone, Copy, Debug)]
 pub struct WgslConstant {
@@ -78,7 +82,24 @@ pub const WGSL_CONSTANTS: &[WgslConstant] = &[
     f("PT_DENOISE_SIGMA_NORMAL", DENOISE_SIGMA_NORMAL),
     f("PT_DENOISE_SIGMA_DEPTH", DENOISE_SIGMA_DEPTH),
     f("PT_DENOISE_SIGMA_LUMINANCE", DENOISE_SIGMA_LUMINANCE),
+    f("PT_DENOISE_MIN_ALBEDO", DENOISE_MIN_ALBEDO),
 ];
+
+/// [`WGSL_CONSTANTS`] as WGSL `const` declarations (the form of
+/// `fathom_core::shared::wgsl_declarations`), for a shader to include ahead of its code.
+pub fn wgsl_declarations() -> String {
+    let mut s =
+        String::from("// GENERATED from fathom_pathtrace::shared: constants shared with Rust.\n");
+    for c in WGSL_CONSTANTS {
+        let (ty, v) = match c.ty {
+            // `{:?}` keeps a decimal point or exponent, as WGSL's f32 literals need.
+            WgslType::F32 => ("f32", format!("{:?}", c.value as f32)),
+            WgslType::U32 => ("u32", format!("{}u", c.value as u32)),
+        };
+        s += &format!("const {}: {ty} = {v};\n", c.name);
+    }
+    s
+}
 
 #[cfg(test)]
 mod tests {

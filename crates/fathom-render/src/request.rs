@@ -178,6 +178,9 @@ pub struct PathRequest {
     pub denoise: bool,
     /// Sampler seed (independent noise for another seed; equal seeds give equal images).
     pub seed: u32,
+    /// Trace on the GPU (fathom-gpu's WGSL port of the same integrator, accumulating on the
+    /// device); what it does not support yet is refused by name.
+    pub gpu: bool,
 }
 
 impl Default for PathRequest {
@@ -190,6 +193,7 @@ impl Default for PathRequest {
             focus_distance: None,
             denoise: false,
             seed: 0,
+            gpu: false,
         }
     }
 }

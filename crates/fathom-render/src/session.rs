@@ -239,6 +239,23 @@ impl Session {
                 let pool = pool(&mut self.pool, req.threads)?;
                 vb.render(camera, req, control, pool)?
             }
+            Backend::Path if req.path.gpu => {
+                if self.gpu.is_none() {
+                    self.gpu = Some(GpuBackend::new(fathom_gpu::Renderer::headless()?));
+                }
+                PathBackend::render_gpu(
+                    &mut self.path,
+                    self.gpu.as_mut().expect("opened above"),
+                    &scene,
+                    &self.tape,
+                    self.tape_generation,
+                    self.shading_generation,
+                    camera,
+                    req,
+                    control,
+                    &mut self.counters,
+                )?
+            }
             Backend::Path => {
                 let key = self.shading_generation;
                 let pb = PathBackend::get(

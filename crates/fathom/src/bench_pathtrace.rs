@@ -2,8 +2,11 @@
 //! per second at 640x480; time until the image is within 2 % RMSE (relative to the mean) of a
 //! high-spp reference of another seed, raw and denoised (at a smaller size, the reference
 //! costs reference-spp samples a pixel); and the time of one accumulation pass (one sample a
-//! pixel) of the session at the explorer's 1280x720. Prints JSON with the load average, since
-//! the machines here are shared.
+//! pixel) of the session at the explorer's 1280x720. With `--gpu`, also the GPU path
+//! tracer's paths per second at the same size (after a warm-up pass that compiles the
+//! pipeline), labelled with the adapter and whether it is a software one (lavapipe: CPU
+//! timings, not GPU speed). Prints JSON with the load average, since the machines here are
+//! shared.
 
 use clap::Args;
 use fathom_core::presets;
@@ -40,6 +43,49 @@ pub struct PathTraceBenchArgs {
     /// Skip the explorer's 1280x720 accumulation pass.
     #[arg(long)]
     no_explorer: bool,
+    /// Also measure the GPU path tracer (fathom-gpu) at --size and --spp.
+    #[arg(long)]
+    gpu: bool,
+}
+
+/// The GPU path tracer's paths per second for `scene` at `size`, `spp` samples a pixel, after
+/// one warm-up pass (a software adapter compiles the pipeline on its first dispatch).
+fn gpu_entry(
+    renderer: &mut fathom_gpu::Renderer,
+    scene: &fathom_core::Scene,
+    tape: &Tape,
+    size: (u32, u32),
+    spp: u32,
+) -> Result<serde_json::Value, String> {
+    let e = |e: fathom_gpu::GpuError| e.to_string();
+    renderer.set_tape(tape).map_err(e)?;
+    let settings = || PathSettings::new(size.0, size.1);
+    let t = Instant::now();
+    renderer.path_begin(scene, tape, settings()).map_err(e)?;
+    renderer
+        .path_add_samples(1, u32::MAX, &Control::default())
+        .map_err(e)?;
+    let warmup = t.elapsed().as_secs_f64();
+    renderer.path_begin(scene, tape, settings()).map_err(e)?;
+    renderer
+        .path_add_samples(spp, u32::MAX, &Control::default())
+        .map_err(e)?;
+    let (_, st) = renderer.path_frame().map_err(e)?;
+    let g = renderer.gpu();
+    Ok(json!({
+        "adapter": g.adapter_name(),
+        "adapter_is_software": g.is_software(),
+        "note": if g.is_software() {
+            "software adapter: these are CPU timings of the WGSL path tracer, not GPU speed"
+        } else {
+            "hardware adapter"
+        },
+        "spp": spp,
+        "first_pass_seconds_with_pipeline_compile": warmup,
+        "paths_per_second": st.paths_per_second(),
+        "evaluations_per_path": st.evaluations as f64 / st.paths.max(1) as f64,
+        "dropped_non_finite": st.dropped_non_finite,
+    }))
 }
 
 fn load_average() -> f64 {
@@ -137,6 +183,11 @@ pub fn run(a: PathTraceBenchArgs) -> Result<(), String> {
         .build()
         .map_err(|e| e.to_string())?;
     let load_before = load_average();
+    let mut renderer = if a.gpu {
+        Some(fathom_gpu::Renderer::headless().map_err(|e| e.to_string())?)
+    } else {
+        None
+    };
     let mut scenes = Vec::new();
     for name in a
         .presets
@@ -161,6 +212,10 @@ pub fn run(a: PathTraceBenchArgs) -> Result<(), String> {
             "evaluations_per_path": st.evaluations as f64 / st.paths.max(1) as f64,
             "dropped_non_finite": st.dropped_non_finite,
         });
+        if let Some(r) = renderer.as_mut() {
+            eprintln!("bench pathtrace: {name} on the GPU");
+            entry["gpu"] = gpu_entry(r, &scene, &tape, a.size, a.spp)?;
+        }
         if a.reference_spp > 0 {
             let (w, h) = a.converge_size;
             let small = PathTracer::new(&scene, &tape, PathSettings::new(w, h))

@@ -142,7 +142,8 @@ pub struct RenderArgs {
     /// How light is computed: `preview`, the fast sphere tracer with Blinn-Phong shading
     /// (the default, and what --renderer chooses among), or `path`, the progressive path
     /// tracer (global illumination, soft shadows, glossy and glass materials, depth of field;
-    /// CPU only so far). `--integrator path` takes --spp or --time-limit, --bounces, --aperture,
+    /// with --gpu on the GPU, which has no fog, sphere lights or environment maps yet).
+    /// `--integrator path` takes --spp or --time-limit, --bounces, --aperture,
     /// --focus-distance and --denoise.
     #[arg(long, value_enum, default_value = "preview")]
     pub integrator: IntegratorKind,
@@ -330,14 +331,7 @@ impl RenderArgs {
     /// The backend the flags choose.
     fn backend(&self) -> Result<Backend, String> {
         if self.integrator == IntegratorKind::Path {
-            if self.gpu || self.renderer == RendererKind::Gpu {
-                return Err(
-                    "--integrator path runs on the CPU only so far (the GPU path \
-                     tracer is not built yet); leave out --gpu"
-                        .into(),
-                );
-            }
-            if self.renderer != RendererKind::Trace {
+            if !matches!(self.renderer, RendererKind::Trace | RendererKind::Gpu) {
                 return Err(format!(
                     "--integrator path and --renderer {} choose two renderers; pick one",
                     self.renderer.name()
@@ -408,6 +402,7 @@ impl RenderArgs {
                 focus_distance: self.focus_distance,
                 denoise: self.denoise.is_some(),
                 seed: self.seed,
+                gpu: self.gpu || self.renderer == RendererKind::Gpu,
             },
             ..RenderRequest::default()
         };
@@ -894,11 +889,19 @@ mod tests {
             let e = parse(flag).unwrap().request().unwrap_err();
             assert!(e.contains("--integrator path"), "{flag:?}: {e}");
         }
-        let e = parse(&["--integrator", "path", "--gpu"])
+        let r = parse(&["--integrator", "path", "--gpu"])
             .unwrap()
             .request()
-            .unwrap_err();
-        assert!(e.contains("CPU only") && e.contains("--gpu"), "{e}");
+            .unwrap();
+        assert!(r.backend == Backend::Path && r.path.gpu);
+        assert!(
+            !parse(&["--integrator", "path"])
+                .unwrap()
+                .request()
+                .unwrap()
+                .path
+                .gpu
+        );
         let e = parse(&["--integrator", "path", "--renderer", "svo"])
             .unwrap()
             .request()

@@ -96,7 +96,23 @@ fn rust_mirrors_of_the_wgsl_structs_have_the_same_layout() {
     // passes.rs: every field's name and offset, and the struct size, must agree with naga's
     // layout of the WGSL declaration.
     let module = validate(&source()).unwrap();
-    for (rust_name, size, fields) in crate::passes::rust_layouts() {
+    check_layouts(&module, crate::passes::rust_layouts());
+}
+
+#[test]
+fn the_path_tracer_validates_and_its_rust_mirrors_have_the_same_layout() {
+    let module = validate(&path_source()).unwrap();
+    check_layouts(&module, crate::path::rust_layouts());
+}
+
+#[test]
+fn the_denoiser_validates_and_its_rust_mirrors_have_the_same_layout() {
+    let module = validate(&denoise_source()).unwrap();
+    check_layouts(&module, crate::denoise::rust_layouts());
+}
+
+fn check_layouts(module: &naga::Module, layouts: Vec<crate::passes::Layout>) {
+    for (rust_name, size, fields) in layouts {
         let wgsl_name = rust_name.strip_prefix("Gpu").unwrap_or(rust_name);
         let (members, span) = module
             .types
@@ -135,12 +151,21 @@ fn rust_mirrors_of_the_wgsl_structs_have_the_same_layout() {
 fn shared_constants_are_generated_not_typed_into_wgsl_files() {
     // A constant of fathom_core::shared written into a .wgsl file by hand could drift from
     // Rust; it must come only from the generated declarations.
-    for c in fathom_core::shared::WGSL_CONSTANTS {
+    for name in fathom_core::shared::WGSL_CONSTANTS
+        .iter()
+        .map(|c| c.name)
+        .chain(
+            fathom_pathtrace::shared::WGSL_CONSTANTS
+                .iter()
+                .map(|c| c.name),
+        )
+        .chain(["PT_MATERIAL_VEC4S", "PT_MAX_EVALUATIONS"])
+    {
         for f in families() {
             assert!(
-                !f.source.contains(&format!("const {}:", c.name)),
+                !f.source.contains(&format!("const {}:", name)),
                 "{} declared in the {} WGSL",
-                c.name,
+                name,
                 f.noun
             );
         }
@@ -149,11 +174,15 @@ fn shared_constants_are_generated_not_typed_into_wgsl_files() {
             ("interp", INTERP),
             ("trace", TRACE),
             ("eval_points", EVAL_POINTS),
+            ("post", POST),
+            ("path", PATH),
+            ("accum", ACCUM),
+            ("denoise", DENOISE),
         ] {
             assert!(
-                !src.contains(&format!("const {}:", c.name)),
+                !src.contains(&format!("const {}:", name)),
                 "{} declared in {file}.wgsl",
-                c.name
+                name
             );
         }
     }

@@ -42,7 +42,11 @@ impl GpuBackend {
         self.renderer
     }
 
-    fn upload(
+    pub fn renderer_mut(&mut self) -> &mut Renderer {
+        &mut self.renderer
+    }
+
+    pub fn upload(
         &mut self,
         tape: &Tape,
         generation: u64,
