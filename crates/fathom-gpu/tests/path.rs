@@ -10,7 +10,7 @@ use fathom_core::{Camera, Node, Scene, Tape, presets};
 use fathom_gpu::{GpuError, Renderer};
 use fathom_pathtrace::colour::Look;
 use fathom_pathtrace::lights::Environment;
-use fathom_pathtrace::{Control, Frame, PathSettings, PathTracer, PbrMaterial, Progressive, Stats};
+use fathom_pathtrace::{Control, Frame, PathSettings, PathTracer, Progressive, Stats};
 use glam::DVec3;
 
 /// A unit sphere seen from z = 4, no lights (fathom-pathtrace's furnace scene).
@@ -54,38 +54,7 @@ fn mean(f: &Frame) -> f64 {
 fn white_furnace() {
     let mut r = common::renderer();
     let scene = sphere_scene();
-    let cases = [
-        ("diffuse, albedo 1", PbrMaterial::diffuse([1.0; 3]), 0.01),
-        (
-            "rough metal, F0 1",
-            PbrMaterial {
-                metallic: 1.0,
-                roughness: 0.8,
-                ..PbrMaterial::diffuse([1.0; 3])
-            },
-            // The albedo tables' interpolation error (as on the CPU).
-            0.015,
-        ),
-        (
-            "smooth dielectric, ior 1.5",
-            PbrMaterial {
-                transmission: 1.0,
-                ior: 1.5,
-                roughness: 0.0,
-                ..PbrMaterial::diffuse([1.0; 3])
-            },
-            0.01,
-        ),
-        (
-            "white plastic",
-            PbrMaterial {
-                roughness: 0.5,
-                specular: 1.0,
-                ..PbrMaterial::diffuse([1.0; 3])
-            },
-            0.015,
-        ),
-    ];
+    let cases = fathom_pathtrace::furnace::furnace_cases();
     for (name, m, tol) in cases {
         let mut s = PathSettings::new(20, 20);
         s.environment = Some(Environment::Uniform(DVec3::ONE));
@@ -111,7 +80,7 @@ fn white_furnace() {
             .flat_map(|c| c.iter())
             .map(|v| (v - 1.0).abs())
             .fold(0.0f32, f32::max);
-        assert!((m - 1.0).abs() < tol, "{name}: mean {m}");
+        assert!((m - 1.0).abs() < tol as f32, "{name}: mean {m}");
         assert!(worst < 0.15, "{name}: a pixel is {worst} away from 1");
     }
 }

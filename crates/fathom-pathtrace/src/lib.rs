@@ -32,6 +32,7 @@ pub mod colour;
 pub mod denoise;
 pub mod distribution;
 pub mod envmap;
+pub mod furnace;
 pub mod integrator;
 pub mod lights;
 pub mod march;

@@ -4,26 +4,8 @@
 
 use std::path::Path;
 
-/// The soft shoulder above 0.8 of fathom-trace: highlights roll off instead of clipping.
-pub fn tonemap(x: f32) -> f32 {
-    if !x.is_finite() || x <= 0.0 {
-        0.0
-    } else if x < 0.8 {
-        x
-    } else {
-        0.8 + 0.2 * (1.0 - (-(x - 0.8) / 0.2).exp())
-    }
-}
-
-/// Linear [0, 1] to the sRGB transfer curve.
-pub fn srgb(x: f32) -> f32 {
-    let x = x.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
+/// The soft highlight shoulder and the sRGB curve of every fathom picture (fathom-image's).
+pub use fathom_image::post::{srgb, tonemap};
 
 /// Tonemapped, gamma-encoded 8-bit RGB of `colour` scaled by `exposure`.
 pub fn to_rgb8(colour: &[[f32; 3]], exposure: f32) -> Vec<u8> {

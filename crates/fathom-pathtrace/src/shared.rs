@@ -5,7 +5,7 @@
 //! the CPU reference the tests check. [`WGSL_CONSTANTS`] lists them in the same shape as
 //! `fathom_core::shared::WGSL_CONSTANTS`.
 
-pub use fathom_core::shared::WgslType;
+pub use fathom_core::shared::{WgslConstant, WgslType};
 
 /// A new ray leaves a surface this many hit epsilons along the normal (on the side it goes
 /// to). The tracer stops within one epsilon of the surface and fractal estimates undershoot
@@ -41,31 +41,12 @@ pub const DENOISE_SIGMA_LUMINANCE: f64 = 4.0;
 /// their colour undivided).
 pub const DENOISE_MIN_ALBEDO: f64 = 1e-3;
 
-/// One shared constant as a shader would declare it.
-#[derive(Clone, Copy, Debug)]
-pub struct WgslConstant {
-    /// The WGSL name.
-    pub name: &'static str,
-    /// The WGSL type.
-    pub ty: WgslType,
-    /// The value (exact for every u32 listed).
-    pub value: f64,
-}
-
 const fn f(name: &'static str, value: f64) -> WgslConstant {
-    WgslConstant {
-        name,
-        ty: WgslType::F32,
-        value,
-    }
+    WgslConstant::f32(name, value)
 }
 
 const fn u(name: &'static str, value: u32) -> WgslConstant {
-    WgslConstant {
-        name,
-        ty: WgslType::U32,
-        value: value as f64,
-    }
+    WgslConstant::u32(name, value)
 }
 
 /// Every constant a WGSL port of the path tracer shares with this crate.
@@ -85,20 +66,9 @@ pub const WGSL_CONSTANTS: &[WgslConstant] = &[
     f("PT_DENOISE_MIN_ALBEDO", DENOISE_MIN_ALBEDO),
 ];
 
-/// [`WGSL_CONSTANTS`] as WGSL `const` declarations (the form of
-/// `fathom_core::shared::wgsl_declarations`), for a shader to include ahead of its code.
+/// [`WGSL_CONSTANTS`] as WGSL `const` declarations, for a shader to include ahead of its code.
 pub fn wgsl_declarations() -> String {
-    let mut s =
-        String::from("// GENERATED from fathom_pathtrace::shared: constants shared with Rust.\n");
-    for c in WGSL_CONSTANTS {
-        let (ty, v) = match c.ty {
-            // `{:?}` keeps a decimal point or exponent, as WGSL's f32 literals need.
-            WgslType::F32 => ("f32", format!("{:?}", c.value as f32)),
-            WgslType::U32 => ("u32", format!("{}u", c.value as u32)),
-        };
-        s += &format!("const {}: {ty} = {v};\n", c.name);
-    }
-    s
+    fathom_core::shared::declarations("fathom_pathtrace::shared", WGSL_CONSTANTS)
 }
 
 #[cfg(test)]

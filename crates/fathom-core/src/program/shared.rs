@@ -64,20 +64,32 @@ pub struct WgslConstant {
     pub value: f64,
 }
 
-const fn f(name: &'static str, value: f64) -> WgslConstant {
-    WgslConstant {
-        name,
-        ty: WgslType::F32,
-        value,
+impl WgslConstant {
+    /// An `f32` constant.
+    pub const fn f32(name: &'static str, value: f64) -> WgslConstant {
+        WgslConstant {
+            name,
+            ty: WgslType::F32,
+            value,
+        }
+    }
+
+    /// A `u32` constant.
+    pub const fn u32(name: &'static str, value: u32) -> WgslConstant {
+        WgslConstant {
+            name,
+            ty: WgslType::U32,
+            value: value as f64,
+        }
     }
 }
 
+const fn f(name: &'static str, value: f64) -> WgslConstant {
+    WgslConstant::f32(name, value)
+}
+
 const fn u(name: &'static str, value: u32) -> WgslConstant {
-    WgslConstant {
-        name,
-        ty: WgslType::U32,
-        value: value as f64,
-    }
+    WgslConstant::u32(name, value)
 }
 
 /// Every constant the shader shares with the Rust side.
@@ -97,9 +109,14 @@ pub const WGSL_CONSTANTS: &[WgslConstant] = &[
 
 /// The WGSL declarations of [`WGSL_CONSTANTS`].
 pub fn wgsl_declarations() -> String {
-    let mut s =
-        String::from("// GENERATED from fathom_core::shared: constants shared with Rust.\n");
-    for c in WGSL_CONSTANTS {
+    declarations("fathom_core::shared", WGSL_CONSTANTS)
+}
+
+/// WGSL `const` declarations of `constants`, headed by a comment naming `source`, the Rust
+/// module they are defined in (for a shader to include ahead of its code).
+pub fn declarations(source: &str, constants: &[WgslConstant]) -> String {
+    let mut s = format!("// GENERATED from {source}: constants shared with Rust.\n");
+    for c in constants {
         let v = match c.ty {
             // `{:?}` keeps a decimal point or exponent, as WGSL's f32 literals need.
             WgslType::F32 => format!("{:?}", c.value as f32),

@@ -60,38 +60,7 @@ fn render(scene: &Scene, settings: PathSettings, spp: u32) -> Frame {
 #[test]
 fn white_furnace() {
     let scene = sphere_scene();
-    let cases = [
-        ("diffuse, albedo 1", PbrMaterial::diffuse([1.0; 3]), 0.01),
-        (
-            "rough metal, F0 1",
-            PbrMaterial {
-                metallic: 1.0,
-                roughness: 0.8,
-                ..PbrMaterial::diffuse([1.0; 3])
-            },
-            // The albedo tables' interpolation error (see bsdf tests).
-            0.015,
-        ),
-        (
-            "smooth dielectric, ior 1.5",
-            PbrMaterial {
-                transmission: 1.0,
-                ior: 1.5,
-                roughness: 0.0,
-                ..PbrMaterial::diffuse([1.0; 3])
-            },
-            0.01,
-        ),
-        (
-            "white plastic",
-            PbrMaterial {
-                roughness: 0.5,
-                specular: 1.0,
-                ..PbrMaterial::diffuse([1.0; 3])
-            },
-            0.015,
-        ),
-    ];
+    let cases = crate::furnace::furnace_cases();
     for (name, m, tol) in cases {
         let mut s = PathSettings::new(20, 20);
         s.environment = Some(Environment::Uniform(DVec3::ONE));
@@ -112,7 +81,7 @@ fn white_furnace() {
             .flat_map(|c| c.iter())
             .map(|v| (v - 1.0).abs())
             .fold(0.0f32, f32::max);
-        assert!((mean - 1.0).abs() < tol, "{name}: mean {mean}");
+        assert!((mean - 1.0).abs() < tol as f32, "{name}: mean {mean}");
         assert!(worst < 0.15, "{name}: a pixel is {worst} away from 1");
     }
 }
