@@ -134,14 +134,23 @@ pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
     }
     output::open_output(&output::sequence_path(&pattern, 0)?).map_err(|e| e.to_string())?;
     if let Some(glb) = &a.camera_path {
-        // The cameras come from the path alone, so they are written before any frame: a path
-        // glTF cannot express (an animated fov) or an unwritable file fails before the work.
+        // The cameras come from the path alone, so they are written before any frame: an
+        // unwritable file fails before the work.
         let cameras: Vec<_> = (0..frames)
             .map(|i| flight.sample(job.time(i, flight.duration())).camera)
             .collect();
         let (w, h) = job.request.output_size();
-        output::save_camera_path(&cameras, a.fps, w as f64 / h as f64, glb)
+        let fov_animated = output::save_camera_path(&cameras, a.fps, w as f64 / h as f64, glb)
             .map_err(|e| format!("--camera-path: {e}"))?;
+        if fov_animated {
+            eprintln!(
+                "note: {}: the path changes the field of view; it is animated through the \
+                 glTF extension KHR_animation_pointer (readers without it keep the first \
+                 frame's fov of {} degrees)",
+                glb.display(),
+                cameras[0].fov
+            );
+        }
     }
 
     let bar = if a.quiet {
