@@ -296,14 +296,19 @@ mod tests {
     fn layered_exr_frames_and_a_gltf_camera_path() {
         let dir = std::env::temp_dir().join(format!("fathom-path-exr-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        // The example's dive widens the fov at its end, which glTF cannot animate: refused
-        // before a frame is written.
+        // The example's dive widens the fov at its end: core glTF cannot animate it, so the
+        // camera path carries it through KHR_animation_pointer.
         let mut a = args(&dir, "dive", 3);
-        a.output = dir.join("f-##.exr");
-        a.camera_path = Some(dir.join("cam.glb"));
-        let e = crate::cmd_render::run(a).unwrap_err();
-        assert!(e.contains("--camera-path") && e.contains("fov"), "{e}");
-        assert!(!dir.join("cam.glb").exists() && !dir.join("f-01.exr").exists());
+        a.output = dir.join("w-##.exr");
+        a.camera_path = Some(dir.join("wide.glb"));
+        crate::cmd_render::run(a).unwrap();
+        let glb = std::fs::read(dir.join("wide.glb")).unwrap();
+        let text = String::from_utf8_lossy(&glb);
+        assert!(
+            text.contains("\"extensionsUsed\":[\"KHR_animation_pointer\"]")
+                && text.contains("/cameras/0/perspective/yfov"),
+            "the fov is animated"
+        );
         // The same path at one fov.
         let mut scene = scene_file::load(&example()).unwrap();
         for p in &mut scene.paths {
