@@ -81,14 +81,34 @@ pub struct Built {
     pub sim: Option<SimReport>,
 }
 
-/// A camera framing `bbox` from above a front corner, vertical field of view 40 degrees.
+/// A camera framing `bbox` from above a front corner, vertical field of view 40 degrees, as
+/// close as it can be with every corner of the box inside the view (a 5% margin; for images
+/// at least as wide as they are tall). Fitting the corners rather than the box's bounding
+/// sphere lets a grid filled to its faces take most of the picture instead of its middle half.
 pub fn framing_camera(bbox: &WorldBox) -> Camera {
     let c = bbox.centre().as_dvec3();
-    let radius = 0.5 * bbox.extent().length() as f64;
     let fov = 40.0f64;
-    let dist = 1.1 * radius / (0.5 * fov).to_radians().sin();
+    let back = DVec3::new(0.55, 0.45, 0.7).normalize();
+    let right = DVec3::Y.cross(back).normalize();
+    let up = back.cross(right);
+    let t = (0.5 * fov).to_radians().tan();
+    let (lo, hi) = (bbox.min.as_dvec3(), bbox.max.as_dvec3());
+    let dist = (0..8)
+        .map(|i| {
+            let p = DVec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            ) - c;
+            // The corner is in view when its offset across the view is within t times its
+            // depth in front of the eye.
+            let across = p.dot(right).abs().max(p.dot(up).abs()) * 1.05;
+            p.dot(back) + across / t
+        })
+        .fold(0.0f64, f64::max)
+        .max(1e-6);
     Camera {
-        eye: c + DVec3::new(0.55, 0.45, 0.7).normalize() * dist,
+        eye: c + back * dist,
         target: c,
         up: DVec3::Y,
         fov,

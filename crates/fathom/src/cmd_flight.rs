@@ -134,14 +134,23 @@ pub fn run(a: &RenderArgs, scene: Scene) -> Result<(), String> {
     }
     output::open_output(&output::sequence_path(&pattern, 0)?).map_err(|e| e.to_string())?;
     if let Some(glb) = &a.camera_path {
-        // The cameras come from the path alone, so they are written before any frame: a path
-        // glTF cannot express (an animated fov) or an unwritable file fails before the work.
+        // The cameras come from the path alone, so they are written before any frame: an
+        // unwritable file fails before the work.
         let cameras: Vec<_> = (0..frames)
             .map(|i| flight.sample(job.time(i, flight.duration())).camera)
             .collect();
         let (w, h) = job.request.output_size();
-        output::save_camera_path(&cameras, a.fps, w as f64 / h as f64, glb)
+        let fov_animated = output::save_camera_path(&cameras, a.fps, w as f64 / h as f64, glb)
             .map_err(|e| format!("--camera-path: {e}"))?;
+        if fov_animated {
+            eprintln!(
+                "note: {}: the path changes the field of view; it is animated through the \
+                 glTF extension KHR_animation_pointer (readers without it keep the first \
+                 frame's fov of {} degrees)",
+                glb.display(),
+                cameras[0].fov
+            );
+        }
     }
 
     let bar = if a.quiet {
@@ -287,14 +296,19 @@ mod tests {
     fn layered_exr_frames_and_a_gltf_camera_path() {
         let dir = std::env::temp_dir().join(format!("fathom-path-exr-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        // The example's dive widens the fov at its end, which glTF cannot animate: refused
-        // before a frame is written.
+        // The example's dive widens the fov at its end: core glTF cannot animate it, so the
+        // camera path carries it through KHR_animation_pointer.
         let mut a = args(&dir, "dive", 3);
-        a.output = dir.join("f-##.exr");
-        a.camera_path = Some(dir.join("cam.glb"));
-        let e = crate::render(a).unwrap_err();
-        assert!(e.contains("--camera-path") && e.contains("fov"), "{e}");
-        assert!(!dir.join("cam.glb").exists() && !dir.join("f-01.exr").exists());
+        a.output = dir.join("w-##.exr");
+        a.camera_path = Some(dir.join("wide.glb"));
+        crate::render(a).unwrap();
+        let glb = std::fs::read(dir.join("wide.glb")).unwrap();
+        let text = String::from_utf8_lossy(&glb);
+        assert!(
+            text.contains("\"extensionsUsed\":[\"KHR_animation_pointer\"]")
+                && text.contains("/cameras/0/perspective/yfov"),
+            "the fov is animated"
+        );
         // The same path at one fov.
         let mut scene = scene_file::load(&example()).unwrap();
         for p in &mut scene.paths {

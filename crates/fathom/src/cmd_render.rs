@@ -135,8 +135,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_video: bool,
     /// With --path: also write the frames' cameras as a glTF animation (.glb), so Blender and
-    /// other tools can match the rendered sequence (a path that animates the fov is refused:
-    /// glTF cannot animate it).
+    /// other tools can match the rendered sequence (a path that changes the fov animates it
+    /// through the glTF extension KHR_animation_pointer; docs/files.md).
     #[arg(long, requires = "path")]
     pub camera_path: Option<PathBuf>,
     /// How light is computed: `preview`, the fast sphere tracer with Blinn-Phong shading
