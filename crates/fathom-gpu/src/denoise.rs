@@ -56,19 +56,7 @@ pub(crate) fn rust_layouts() -> Vec<crate::passes::Layout> {
     ]
 }
 
-/// The denoiser's pipelines (built once per renderer) and its buffers for one image size.
-pub(crate) struct DenoiseState {
-    prepare: wgpu::ComputePipeline,
-    gradient: wgpu::ComputePipeline,
-    atrous: wgpu::ComputePipeline,
-    finish: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
-    globals: wgpu::Buffer,
-    /// (size, colour buffer, bind groups reading A writing B and reading B writing A); they
-    /// bind the path tracer's accumulation and texture, so they are dropped when those are
-    /// rebuilt.
-    pub(crate) targets: Option<((u32, u32), wgpu::Buffer, [wgpu::BindGroup; 2])>,
-}
+use crate::path_state::DenoiseState;
 
 impl DenoiseState {
     pub(crate) fn new(r: &Renderer) -> Result<DenoiseState, GpuError> {

@@ -18,6 +18,7 @@ pub mod device;
 pub mod error;
 mod passes;
 pub mod path;
+mod path_state;
 pub mod precision;
 pub mod renderer;
 pub mod shader;

@@ -30,74 +30,8 @@ use fathom_pathtrace::{Control, Frame, PathSettings, PathTracer, Stats};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-/// Most directional lights the GPU path tracer takes.
-pub const MAX_CONE_LIGHTS: usize = 8;
-/// vec4s per material in the GPU table (see [`material_rows`]).
-pub const MATERIAL_VEC4S: u32 = 9;
-/// Most distance evaluations of one path: every march is bounded by the scene's step limit,
-/// this only keeps a corrupt tape from hanging the device.
-pub const MAX_PATH_EVALUATIONS: u32 = 1 << 24;
-/// Most samples per pixel one image accumulates (the command line's `--spp` range).
-pub const MAX_SAMPLES: u32 = 1 << 20;
-/// Bytes of one pixel's running sums (`struct PtPx`).
-const PIXEL_BYTES: u64 = std::mem::size_of::<PtPx>() as u64;
-
-/// The constants `path.wgsl` shares with this module.
-pub(crate) fn wgsl_declarations() -> String {
-    format!(
-        "// GENERATED from fathom_gpu::path.\nconst PT_MATERIAL_VEC4S: u32 = {MATERIAL_VEC4S}u;\n\
-         const PT_MAX_EVALUATIONS: u32 = {MAX_PATH_EVALUATIONS}u;\n"
-    )
-}
-
-/// `struct PtCone` of path.wgsl.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct PtCone {
-    /// Unit direction towards the light; w: 1 - cos(angular radius), 0 for a delta light.
-    pub dir: [f32; 4],
-    /// Radiance (irradiance for a delta light); w: 1 when it casts shadows.
-    pub radiance: [f32; 4],
-}
-
-/// The uniform block of the path tracer: `struct PtGlobals` of path.wgsl, field for field.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct PtGlobals {
-    /// Eye; w: lens radius.
-    pub eye: [f32; 4],
-    /// w: focus distance.
-    pub forward: [f32; 4],
-    /// w: tan(fov / 2).
-    pub right: [f32; 4],
-    /// w: hit threshold per unit distance.
-    pub up: [f32; 4],
-    /// Sky straight up; w: environment light scale.
-    pub env_top: [f32; 4],
-    /// Sky at and below the horizon; w: t_max.
-    pub env_bottom: [f32; 4],
-    /// Width, height, max steps, max bounces.
-    pub dims: [u32; 4],
-    /// Directional lights, materials, seed, light sampling.
-    pub dims2: [u32; 4],
-    /// Sample index, first row, end row, environment sampled.
-    pub pass_info: [u32; 4],
-    pub cones: [PtCone; MAX_CONE_LIGHTS],
-}
-
-/// One pixel's running sums: `struct PtPx` of path.wgsl.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct PtPx {
-    /// Radiance sum, finite samples.
-    pub sum: [f32; 4],
-    /// Welford mean and M2 of luminance, distance evaluations, hits.
-    pub stats: [f32; 4],
-    /// First-hit albedo sum, first-hit depth sum.
-    pub albedo: [f32; 4],
-    /// First-hit normal sum, material id bits.
-    pub normal: [f32; 4],
-}
+pub use crate::path_state::{MATERIAL_VEC4S, MAX_CONE_LIGHTS, MAX_PATH_EVALUATIONS, MAX_SAMPLES};
+use crate::path_state::{PIXEL_BYTES, PathState, PathTargets, PtCone, PtGlobals, PtPx};
 
 /// The layouts of the Rust mirrors of path.wgsl's structs, for the layout test.
 #[cfg(test)]
@@ -277,28 +211,6 @@ fn globals(tracer: &PathTracer) -> Result<PtGlobals, GpuError> {
         ],
         cones,
     })
-}
-
-/// The path pipeline and the buffers that do not depend on the image size.
-pub(crate) struct PathState {
-    pipeline: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
-    globals_buf: wgpu::Buffer,
-    materials: wgpu::Buffer,
-    tables: wgpu::Buffer,
-    counters: wgpu::Buffer,
-    targets: Option<PathTargets>,
-    /// The prepared frame (None until `path_begin`).
-    globals: Option<PtGlobals>,
-    stats: Stats,
-}
-
-/// The accumulation buffer and display texture of one image size.
-struct PathTargets {
-    size: (u32, u32),
-    accum: wgpu::Buffer,
-    texture: wgpu::Texture,
-    group: wgpu::BindGroup,
 }
 
 fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {

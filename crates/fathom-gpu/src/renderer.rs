@@ -39,9 +39,9 @@ pub struct Renderer {
     /// Render targets of the last image size, reused while the size stays.
     pub(crate) targets: Option<Targets>,
     /// The path tracer's pipeline and accumulation (built on first use).
-    pub(crate) path: Option<crate::path::PathState>,
+    pub(crate) path: Option<crate::path_state::PathState>,
     /// The path tracer's denoiser (built on first use).
-    pub(crate) denoise: Option<crate::denoise::DenoiseState>,
+    pub(crate) denoise: Option<crate::path_state::DenoiseState>,
 }
 
 /// Buffers and the output texture for one output size (rebuilt only when it changes).

@@ -219,7 +219,7 @@ pub fn source() -> String {
 pub fn path_source() -> String {
     let mut s = interpreter_source();
     s += &fathom_pathtrace::shared::wgsl_declarations();
-    s += &crate::path::wgsl_declarations();
+    s += &crate::path_state::wgsl_declarations();
     for part in [POST, ACCUM, PATH] {
         s += part;
         s += "\n";

@@ -538,8 +538,9 @@ pub fn size_from_fract(a: &mut RenderArgs) -> Result<(), String> {
 
 /// `fathom render` of one image (`--shard`/`--tiles` and `--path` are dispatched by
 /// [`crate::render`] before this).
-pub fn run(a: RenderArgs) -> Result<(), String> {
+pub fn run(mut a: RenderArgs) -> Result<(), String> {
     let start = Instant::now();
+    size_from_fract(&mut a)?;
     let req = a.request()?;
     let kind = output::ImageKind::for_path(&a.output, a.bit_depth).map_err(|e| e.to_string())?;
     let scene = load_scene(&a)?;
