@@ -34,6 +34,25 @@ struct AccumulatorKey {
     gpu: bool,
 }
 
+impl AccumulatorKey {
+    /// The key of a view of `camera` rendered for `req` (on the GPU when `gpu`).
+    fn new(shading_generation: u64, camera: &Camera, req: &RenderRequest, gpu: bool) -> Self {
+        let p = &req.path;
+        AccumulatorKey {
+            shading_generation,
+            camera: camera.clone(),
+            width: req.width,
+            height: req.height,
+            fog: req.fog,
+            max_bounces: p.max_bounces,
+            aperture: p.aperture,
+            focus_distance: p.focus_distance,
+            seed: p.seed,
+            gpu,
+        }
+    }
+}
+
 /// Where the samples accumulate.
 enum Accumulator {
     /// On the CPU, in fathom-pathtrace's accumulator.
@@ -62,18 +81,7 @@ impl PathBackend {
         counters: &mut Counters,
     ) -> Result<&'a mut PathBackend, fathom_pathtrace::PathTraceError> {
         let p = &req.path;
-        let key = AccumulatorKey {
-            shading_generation: generation,
-            camera: camera.clone(),
-            width: req.width,
-            height: req.height,
-            fog: req.fog,
-            max_bounces: p.max_bounces,
-            aperture: p.aperture,
-            focus_distance: p.focus_distance,
-            seed: p.seed,
-            gpu: false,
-        };
+        let key = AccumulatorKey::new(generation, camera, req, false);
         if slot.as_ref().is_none_or(|b| b.key != key) {
             *slot = None;
             let mut viewed = scene.clone();
@@ -165,18 +173,7 @@ impl PathBackend {
     ) -> Result<Rendered, crate::RenderError> {
         let t0 = Instant::now();
         let p = &req.path;
-        let key = AccumulatorKey {
-            shading_generation,
-            camera: camera.clone(),
-            width: req.width,
-            height: req.height,
-            fog: req.fog,
-            max_bounces: p.max_bounces,
-            aperture: p.aperture,
-            focus_distance: p.focus_distance,
-            seed: p.seed,
-            gpu: true,
-        };
+        let key = AccumulatorKey::new(shading_generation, camera, req, true);
         gpu.upload(tape, tape_generation, counters)?;
         let renderer = gpu.renderer_mut();
         let current = slot.as_ref().is_some_and(|b| {
